@@ -1,0 +1,26 @@
+//! # studyrun
+//!
+//! Parameter studies of a deep-groove ball bearing with raceway waviness inside a
+//! planar slider-crank (Xu & Li, Multibody Syst Dyn 2014). The physics is specified
+//! in `MODEL.md` (shipped beside the repository as `../shared/MODEL.md`).
+//!
+//! The data's path through the crate:
+//!
+//! 1. [`mechanism`] builds a case: the slider-crank on the general planar
+//!    [`multibody`] core, with the [`bearing`] force element at the chosen location.
+//! 2. [`solve`] integrates it with an adaptive Dormand–Prince pair, fixed-step RK4
+//!    or an implicit SDIRK method.
+//! 3. [`simulate`] samples the outputs of MODEL.md §3 at exact sample times and
+//!    [`metrics`] turns them into vibration measures against the ideal mechanism.
+//!
+//! Units are SI throughout (m, kg, s, N, rad) unless a name says otherwise.
+#![warn(missing_docs)]
+
+pub mod bearing;
+pub mod error;
+pub mod linalg;
+pub mod mechanism;
+pub mod metrics;
+pub mod multibody;
+pub mod simulate;
+pub mod solve;
