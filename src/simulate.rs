@@ -1,1 +1,164 @@
-//! (in progress)
+//! Running one case: integrate a [`SliderCrank`] and sample the outputs of
+//! MODEL.md §3 at exact, uniformly spaced sample times.
+
+use std::time::Instant;
+
+use crate::error::ParamError;
+use crate::mechanism::{CaseParams, Location, Sample, SliderCrank};
+use crate::solve::{integrate, SolveError, SolverSettings, Stats};
+
+/// Uniform output sampling: times `k / sample_rate` for `k = 0..=n` with
+/// `n = round(duration × sample_rate)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampling {
+    /// Simulated time (s, > 0).
+    pub duration: f64,
+    /// Output samples per second (Hz, > 0).
+    pub sample_rate: f64,
+}
+
+impl Sampling {
+    /// Checks both fields and that the number of samples is sane (≤ 1e9).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return Err(ParamError::new("duration", self.duration, "finite and > 0 s"));
+        }
+        if !(self.sample_rate.is_finite() && self.sample_rate > 0.0) {
+            return Err(ParamError::new("sample_rate", self.sample_rate, "finite and > 0 Hz"));
+        }
+        if self.duration * self.sample_rate > 1e9 {
+            return Err(ParamError::new(
+                "sample_rate",
+                self.sample_rate,
+                "at most 1e9 samples per case (duration x sample_rate)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Number of samples, both ends included.
+    pub fn len(&self) -> usize {
+        (self.duration * self.sample_rate).round() as usize + 1
+    }
+
+    /// Always false: a sampling has at least the sample at t = 0.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The sample times (s), computed as `k / sample_rate`, never accumulated.
+    pub fn times(&self) -> Vec<f64> {
+        (0..self.len()).map(|k| k as f64 / self.sample_rate).collect()
+    }
+}
+
+/// One output channel: a named scalar time series of a case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Channel {
+    /// Variable name in files.
+    pub name: &'static str,
+    /// CF-style units.
+    pub units: &'static str,
+    /// Human-readable description.
+    pub long_name: &'static str,
+}
+
+/// The output channels, in file order. For the ideal mechanism the `bearing_*`,
+/// `eccentricity_*` and `loaded_balls` channels are NaN, 0 and 0; compare with its
+/// `crank_ground_force_*` or `crank_rod_force_*` instead.
+pub const CHANNELS: [Channel; 12] = [
+    Channel { name: "slider_acceleration", units: "m s-2", long_name: "slider acceleration" },
+    Channel { name: "crank_moment", units: "N m", long_name: "driving moment on the crank (counter-clockwise positive)" },
+    Channel { name: "bearing_force", units: "N", long_name: "bearing equivalent reaction force |F|" },
+    Channel { name: "bearing_force_x", units: "N", long_name: "bearing force on the housing, x" },
+    Channel { name: "bearing_force_y", units: "N", long_name: "bearing force on the housing, y" },
+    Channel { name: "eccentricity_x", units: "m", long_name: "bearing eccentricity (journal minus housing centre), x" },
+    Channel { name: "eccentricity_y", units: "m", long_name: "bearing eccentricity (journal minus housing centre), y" },
+    Channel { name: "loaded_balls", units: "1", long_name: "number of loaded balls" },
+    Channel { name: "crank_ground_force_x", units: "N", long_name: "force on the ground from the crank at the crank-ground joint, x" },
+    Channel { name: "crank_ground_force_y", units: "N", long_name: "force on the ground from the crank at the crank-ground joint, y" },
+    Channel { name: "crank_rod_force_x", units: "N", long_name: "force on the crank from the rod at the crank-rod joint, x" },
+    Channel { name: "crank_rod_force_y", units: "N", long_name: "force on the crank from the rod at the crank-rod joint, y" },
+];
+
+/// Index of a channel in [`CHANNELS`] by name.
+pub fn channel_index(name: &str) -> Option<usize> {
+    CHANNELS.iter().position(|c| c.name == name)
+}
+
+/// The values of every channel in [`CHANNELS`] order for one sample.
+pub fn channel_values(s: &Sample, location: Location) -> [f64; CHANNELS.len()] {
+    let f = s.joint_force(location).unwrap_or([f64::NAN; 2]);
+    [
+        s.slider_acceleration,
+        s.crank_moment,
+        f[0].hypot(f[1]),
+        f[0],
+        f[1],
+        s.eccentricity[0],
+        s.eccentricity[1],
+        s.loaded_balls as f64,
+        s.crank_ground_force[0],
+        s.crank_ground_force[1],
+        s.crank_rod_force[0],
+        s.crank_rod_force[1],
+    ]
+}
+
+/// The sampled outputs of one case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseOutput {
+    /// Where the bearing sat.
+    pub location: Location,
+    /// Sample times (s).
+    pub times: Vec<f64>,
+    /// `channels[c][k]`: channel `c` of [`CHANNELS`] at `times[k]`.
+    pub channels: Vec<Vec<f64>>,
+    /// Integrator work.
+    pub stats: Stats,
+    /// Wall-clock time of the integration and sampling (s).
+    pub wall_time: f64,
+}
+
+impl CaseOutput {
+    /// The series of the channel called `name`, if there is one.
+    pub fn channel(&self, name: &str) -> Option<&[f64]> {
+        channel_index(name).map(|c| self.channels[c].as_slice())
+    }
+}
+
+/// Why a case could not be simulated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CaseError {
+    /// A parameter is out of range.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// The integration stopped early.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// Simulates one case with `solver`, sampled as `sampling` says.
+pub fn simulate(case: &CaseParams, solver: &SolverSettings, sampling: &Sampling) -> Result<CaseOutput, CaseError> {
+    sampling.validate()?;
+    let start = Instant::now();
+    let mut mech = SliderCrank::new(case)?;
+    let times = sampling.times();
+    let mut channels = vec![Vec::with_capacity(times.len()); CHANNELS.len()];
+    let y0 = mech.initial_state();
+    let location = case.location;
+    let stats = integrate(&mut mech, solver, 0.0, &y0, &times, |m, t, y| {
+        let s = m.sample(t, y)?;
+        for (c, v) in channels.iter_mut().zip(channel_values(&s, location)) {
+            c.push(v);
+        }
+        Ok(())
+    })?;
+    Ok(CaseOutput {
+        location,
+        times,
+        channels,
+        stats,
+        wall_time: start.elapsed().as_secs_f64(),
+    })
+}
