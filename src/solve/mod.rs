@@ -124,3 +124,80 @@ pub enum SolveError {
     #[error("invalid solver setting: {0}")]
     InvalidSetting(String),
 }
+
+mod control;
+mod eval;
+mod explicit;
+mod output;
+mod sdirk;
+mod tableau;
+mod validate;
+
+/// Integrates `sys` from `t0` (s) and state `y0` to the last of `sample_times` (s)
+/// with `settings`, calling `observe(sys, t, y)` exactly once per sample time, in
+/// order, with the state `y` at exactly that time (interpolated inside a step, never
+/// snapped to a step end; samples equal to `t0` get `y0` itself).
+///
+/// Sample times must be finite, `>= t0` and non-decreasing; repeated times are each
+/// observed. Empty `sample_times` returns zero [`Stats`] without calling anything.
+/// A system of dimension 0 only sees the observer calls.
+///
+/// # Errors
+/// * [`SolveError::InvalidSetting`], naming the field and its value, for a tolerance,
+///   step or `max_step` that is not positive and finite (`max_step` may be
+///   infinite), a non-finite `t0` or `y0`, a `y0` whose length is not
+///   [`OdeSystem::dim`], or bad sample times; checked before anything runs.
+/// * [`SolveError::Model`] when `f` or the observer fails (with the time of the call).
+/// * [`SolveError::StepBudgetExhausted`] after `settings.max_steps` steps (accepted
+///   plus rejected); for [`Method::Rk4`] before starting, if the run needs more.
+/// * [`SolveError::StepSizeTooSmall`] when an adaptive step falls below `16 ε |t|`.
+/// * [`SolveError::NonFinite`] when the state of [`Method::Rk4`] (or an SDIRK4
+///   Jacobian) becomes NaN or infinite; the adaptive methods instead reject such
+///   steps and cut the step size by 10.
+pub fn integrate<S, O>(
+    sys: &mut S,
+    settings: &SolverSettings,
+    t0: f64,
+    y0: &[f64],
+    sample_times: &[f64],
+    observe: O,
+) -> Result<Stats, SolveError>
+where
+    S: OdeSystem,
+    O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
+{
+    validate::settings(settings)?;
+    validate::initial_state(sys.dim(), t0, y0)?;
+    validate::sample_times(t0, sample_times)?;
+    let Some(&t_end) = sample_times.last() else {
+        return Ok(Stats::default());
+    };
+    let mut samples = output::Samples::new(sample_times, observe);
+    if y0.is_empty() || t_end == t0 {
+        // Nothing to integrate: the state is `y0` at every sample time.
+        samples.serve(sys, t_end, y0, &mut [], |_, _| {})?;
+        return Ok(Stats::default());
+    }
+    let problem = eval::Problem {
+        t0,
+        y0,
+        t_end,
+        max_steps: settings.max_steps,
+        max_step: settings.max_step,
+    };
+    match settings.method {
+        Method::DormandPrince { rtol, atol } => explicit::dormand_prince(
+            sys,
+            &problem,
+            control::Tolerance { rtol, atol },
+            &mut samples,
+        ),
+        Method::Rk4 { step } => explicit::rk4(sys, &problem, step, &mut samples),
+        Method::Sdirk4 { rtol, atol } => sdirk::sdirk4(
+            sys,
+            &problem,
+            control::Tolerance { rtol, atol },
+            &mut samples,
+        ),
+    }
+}
