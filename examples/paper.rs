@@ -19,7 +19,11 @@ const LOCATIONS: [Location; 2] = [Location::CrankGround, Location::CrankRod];
 type Key = (Location, u32, bool, usize);
 
 fn case(location: Location, rpm: f64, waviness: bool, balls: usize) -> CaseParams {
-    let mut c = CaseParams { location, rpm, ..CaseParams::default() };
+    let mut c = CaseParams {
+        location,
+        rpm,
+        ..CaseParams::default()
+    };
     c.bearing.ball_count = balls;
     if waviness {
         c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
@@ -29,13 +33,25 @@ fn case(location: Location, rpm: f64, waviness: bool, balls: usize) -> CaseParam
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let sampling = Sampling { duration: 0.4, sample_rate: 50_000.0 };
-    let solver = SolverSettings::new(Method::DormandPrince { rtol: 1e-8, atol: 1e-12 });
-    println!("Paper study: DOPRI5 rtol 1e-8, {} s at {} Hz; metrics from t = 60/rpm (revolution 2 on)", sampling.duration, sampling.sample_rate);
+    let sampling = Sampling {
+        duration: 0.4,
+        sample_rate: 50_000.0,
+    };
+    let solver = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-8,
+        atol: 1e-12,
+    });
+    println!(
+        "Paper study: DOPRI5 rtol 1e-8, {} s at {} Hz; metrics from t = 60/rpm (revolution 2 on)",
+        sampling.duration, sampling.sample_rate
+    );
 
     let mut ideal: BTreeMap<u32, CaseOutput> = BTreeMap::new();
     for rpm in RPMS {
-        ideal.insert(rpm as u32, simulate(&case(Location::Ideal, rpm, false, 9), &solver, &sampling)?);
+        ideal.insert(
+            rpm as u32,
+            simulate(&case(Location::Ideal, rpm, false, 9), &solver, &sampling)?,
+        );
     }
     let mut results: BTreeMap<Key, (VibrationMetrics, CaseOutput)> = BTreeMap::new();
     let mut total_time = 0.0;
@@ -45,7 +61,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 for balls in BALLS {
                     let out = simulate(&case(location, rpm, waviness, balls), &solver, &sampling)?;
                     total_time += out.wall_time;
-                    let m = vibration_metrics(&out, &ideal[&(rpm as u32)], default_window_start(rpm));
+                    let m =
+                        vibration_metrics(&out, &ideal[&(rpm as u32)], default_window_start(rpm));
                     results.insert((location, rpm as u32, waviness, balls), (m, out));
                 }
             }
@@ -56,7 +73,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| location | rpm | waviness | N_b | slider acc RMS dev (m/s²) | rel. | crank moment RMS dev (N m) | rel. | bearing force RMS dev (N) | rel. | max F (N) | steps | RHS evals | wall (s) |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for ((loc, rpm, wav, nb), (m, out)) in &results {
-        let max_f = out.channel("bearing_force").unwrap().iter().copied().fold(0.0, f64::max);
+        let max_f = out
+            .channel("bearing_force")
+            .unwrap()
+            .iter()
+            .copied()
+            .fold(0.0, f64::max);
         println!(
             "| {loc} | {rpm} | {} | {nb} | {:.3} | {:.1}% | {:.4} | {:.1}% | {:.2} | {:.1}% | {:.1} | {} | {} | {:.2} |",
             if *wav { "4 µm" } else { "off" },
@@ -75,13 +97,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("\ntotal integration wall time: {total_time:.2} s for 32 bearing cases");
 
     let metric = |k: Key| results[&k].0.slider_acceleration.rms;
-    println!("\nFindings (metric: RMS deviation of the slider acceleration from the ideal mechanism):");
+    println!(
+        "\nFindings (metric: RMS deviation of the slider acceleration from the ideal mechanism):"
+    );
     // 1. No waviness: close to ideal; 8 balls worst, more balls closer to ideal.
     let mut f1 = true;
     for location in LOCATIONS {
         for rpm in RPMS.map(|r| r as u32) {
-            let v: Vec<f64> = BALLS.iter().map(|&b| metric((location, rpm, false, b))).collect();
-            let rel: Vec<f64> = BALLS.iter().map(|&b| results[&(location, rpm, false, b)].0.slider_acceleration.relative_rms()).collect();
+            let v: Vec<f64> = BALLS
+                .iter()
+                .map(|&b| metric((location, rpm, false, b)))
+                .collect();
+            let rel: Vec<f64> = BALLS
+                .iter()
+                .map(|&b| {
+                    results[&(location, rpm, false, b)]
+                        .0
+                        .slider_acceleration
+                        .relative_rms()
+                })
+                .collect();
             let eight_worst = v[0] >= v.iter().copied().fold(0.0, f64::max);
             let decreasing = v.windows(2).all(|w| w[1] <= w[0]);
             let close = rel.iter().all(|r| *r < 0.05);
@@ -93,14 +128,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
-    println!("  => finding 1 (close to ideal, 8 balls worst, more balls closer): {}", verdict(f1));
+    println!(
+        "  => finding 1 (close to ideal, 8 balls worst, more balls closer): {}",
+        verdict(f1)
+    );
     // 2. Waviness makes it vibrate; 8 worst, 9 best.
     let mut f2a = true;
     let mut f2b = true;
     for location in LOCATIONS {
         for rpm in RPMS.map(|r| r as u32) {
-            let on: Vec<f64> = BALLS.iter().map(|&b| metric((location, rpm, true, b))).collect();
-            let off: Vec<f64> = BALLS.iter().map(|&b| metric((location, rpm, false, b))).collect();
+            let on: Vec<f64> = BALLS
+                .iter()
+                .map(|&b| metric((location, rpm, true, b)))
+                .collect();
+            let off: Vec<f64> = BALLS
+                .iter()
+                .map(|&b| metric((location, rpm, false, b)))
+                .collect();
             let more = on.iter().zip(&off).all(|(a, b)| a > b);
             let worst = BALLS[argmax(&on)];
             let best = BALLS[argmin(&on)];
@@ -112,17 +156,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
-    println!("  => finding 2a (waviness makes the mechanism vibrate): {}", verdict(f2a));
-    println!("  => finding 2b (8 balls worst, 9 best, at both speeds and locations): {}", verdict(f2b));
+    println!(
+        "  => finding 2a (waviness makes the mechanism vibrate): {}",
+        verdict(f2a)
+    );
+    println!(
+        "  => finding 2b (8 balls worst, 9 best, at both speeds and locations): {}",
+        verdict(f2b)
+    );
     // 3. crank_rod vibrates less than crank_ground.
     let mut smaller = 0;
     let mut total = 0;
     for rpm in RPMS.map(|r| r as u32) {
         for b in BALLS {
-            let (g, r) = (metric((Location::CrankGround, rpm, true, b)), metric((Location::CrankRod, rpm, true, b)));
+            let (g, r) = (
+                metric((Location::CrankGround, rpm, true, b)),
+                metric((Location::CrankRod, rpm, true, b)),
+            );
             total += 1;
             smaller += usize::from(r < g);
-            println!("  3. {rpm} rpm, N_b = {b}, waviness: crank_ground {g:.3} vs crank_rod {r:.3} m/s²");
+            println!(
+                "  3. {rpm} rpm, N_b = {b}, waviness: crank_ground {g:.3} vs crank_rod {r:.3} m/s²"
+            );
         }
     }
     println!("  => finding 3 (crank_rod smaller than crank_ground): {} ({smaller} of {total} comparisons)", verdict(smaller == total));

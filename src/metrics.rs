@@ -26,12 +26,20 @@ impl Deviation {
                 let d = a - b;
                 sum += d * d;
                 sum_ref += b * b;
-                peak = if d.is_nan() { f64::NAN } else { peak.max(d.abs()) };
+                peak = if d.is_nan() {
+                    f64::NAN
+                } else {
+                    peak.max(d.abs())
+                };
                 n += 1;
             }
         }
         if n == 0 {
-            return Self { rms: f64::NAN, peak: f64::NAN, reference_rms: f64::NAN };
+            return Self {
+                rms: f64::NAN,
+                peak: f64::NAN,
+                reference_rms: f64::NAN,
+            };
         }
         Self {
             rms: (sum / n as f64).sqrt(),
@@ -78,8 +86,14 @@ pub fn vibration_metrics(case: &CaseOutput, ideal: &CaseOutput, t_from: f64) -> 
         .collect();
     let dev = |a: &[f64], b: &[f64]| Deviation::between(a, b, &case.times, t_from);
     VibrationMetrics {
-        slider_acceleration: dev(&series(case, "slider_acceleration"), &series(ideal, "slider_acceleration")),
-        crank_moment: dev(&series(case, "crank_moment"), &series(ideal, "crank_moment")),
+        slider_acceleration: dev(
+            &series(case, "slider_acceleration"),
+            &series(ideal, "slider_acceleration"),
+        ),
+        crank_moment: dev(
+            &series(case, "crank_moment"),
+            &series(ideal, "crank_moment"),
+        ),
         bearing_force: dev(&series(case, "bearing_force"), &ideal_force),
     }
 }

@@ -21,10 +21,18 @@ impl Sampling {
     /// Checks both fields and that the number of samples is sane (≤ 1e9).
     pub fn validate(&self) -> Result<(), ParamError> {
         if !(self.duration.is_finite() && self.duration > 0.0) {
-            return Err(ParamError::new("duration", self.duration, "finite and > 0 s"));
+            return Err(ParamError::new(
+                "duration",
+                self.duration,
+                "finite and > 0 s",
+            ));
         }
         if !(self.sample_rate.is_finite() && self.sample_rate > 0.0) {
-            return Err(ParamError::new("sample_rate", self.sample_rate, "finite and > 0 Hz"));
+            return Err(ParamError::new(
+                "sample_rate",
+                self.sample_rate,
+                "finite and > 0 Hz",
+            ));
         }
         if self.duration * self.sample_rate > 1e9 {
             return Err(ParamError::new(
@@ -48,7 +56,9 @@ impl Sampling {
 
     /// The sample times (s), computed as `k / sample_rate`, never accumulated.
     pub fn times(&self) -> Vec<f64> {
-        (0..self.len()).map(|k| k as f64 / self.sample_rate).collect()
+        (0..self.len())
+            .map(|k| k as f64 / self.sample_rate)
+            .collect()
     }
 }
 
@@ -67,18 +77,66 @@ pub struct Channel {
 /// `eccentricity_*` and `loaded_balls` channels are NaN, 0 and 0; compare with its
 /// `crank_ground_force_*` or `crank_rod_force_*` instead.
 pub const CHANNELS: [Channel; 12] = [
-    Channel { name: "slider_acceleration", units: "m s-2", long_name: "slider acceleration" },
-    Channel { name: "crank_moment", units: "N m", long_name: "driving moment on the crank (counter-clockwise positive)" },
-    Channel { name: "bearing_force", units: "N", long_name: "bearing equivalent reaction force |F|" },
-    Channel { name: "bearing_force_x", units: "N", long_name: "bearing force on the housing, x" },
-    Channel { name: "bearing_force_y", units: "N", long_name: "bearing force on the housing, y" },
-    Channel { name: "eccentricity_x", units: "m", long_name: "bearing eccentricity (journal minus housing centre), x" },
-    Channel { name: "eccentricity_y", units: "m", long_name: "bearing eccentricity (journal minus housing centre), y" },
-    Channel { name: "loaded_balls", units: "1", long_name: "number of loaded balls" },
-    Channel { name: "crank_ground_force_x", units: "N", long_name: "force on the ground from the crank at the crank-ground joint, x" },
-    Channel { name: "crank_ground_force_y", units: "N", long_name: "force on the ground from the crank at the crank-ground joint, y" },
-    Channel { name: "crank_rod_force_x", units: "N", long_name: "force on the crank from the rod at the crank-rod joint, x" },
-    Channel { name: "crank_rod_force_y", units: "N", long_name: "force on the crank from the rod at the crank-rod joint, y" },
+    Channel {
+        name: "slider_acceleration",
+        units: "m s-2",
+        long_name: "slider acceleration",
+    },
+    Channel {
+        name: "crank_moment",
+        units: "N m",
+        long_name: "driving moment on the crank (counter-clockwise positive)",
+    },
+    Channel {
+        name: "bearing_force",
+        units: "N",
+        long_name: "bearing equivalent reaction force |F|",
+    },
+    Channel {
+        name: "bearing_force_x",
+        units: "N",
+        long_name: "bearing force on the housing, x",
+    },
+    Channel {
+        name: "bearing_force_y",
+        units: "N",
+        long_name: "bearing force on the housing, y",
+    },
+    Channel {
+        name: "eccentricity_x",
+        units: "m",
+        long_name: "bearing eccentricity (journal minus housing centre), x",
+    },
+    Channel {
+        name: "eccentricity_y",
+        units: "m",
+        long_name: "bearing eccentricity (journal minus housing centre), y",
+    },
+    Channel {
+        name: "loaded_balls",
+        units: "1",
+        long_name: "number of loaded balls",
+    },
+    Channel {
+        name: "crank_ground_force_x",
+        units: "N",
+        long_name: "force on the ground from the crank at the crank-ground joint, x",
+    },
+    Channel {
+        name: "crank_ground_force_y",
+        units: "N",
+        long_name: "force on the ground from the crank at the crank-ground joint, y",
+    },
+    Channel {
+        name: "crank_rod_force_x",
+        units: "N",
+        long_name: "force on the crank from the rod at the crank-rod joint, x",
+    },
+    Channel {
+        name: "crank_rod_force_y",
+        units: "N",
+        long_name: "force on the crank from the rod at the crank-rod joint, y",
+    },
 ];
 
 /// Index of a channel in [`CHANNELS`] by name.
@@ -139,7 +197,11 @@ pub enum CaseError {
 }
 
 /// Simulates one case with `solver`, sampled as `sampling` says.
-pub fn simulate(case: &CaseParams, solver: &SolverSettings, sampling: &Sampling) -> Result<CaseOutput, CaseError> {
+pub fn simulate(
+    case: &CaseParams,
+    solver: &SolverSettings,
+    sampling: &Sampling,
+) -> Result<CaseOutput, CaseError> {
     sampling.validate()?;
     let start = Instant::now();
     let mut mech = SliderCrank::new(case)?;

@@ -33,7 +33,10 @@ fn static_force(params: &BearingParams, e: [f64; 2]) -> ([f64; 2], usize) {
 #[test]
 fn symmetric_ball_set_gives_force_along_the_symmetry_axis() {
     for n in [8usize, 9, 10, 11] {
-        let params = BearingParams { ball_count: n, ..BearingParams::default() };
+        let params = BearingParams {
+            ball_count: n,
+            ..BearingParams::default()
+        };
         let mag = 30e-6;
         for angle in [0.0, std::f64::consts::PI / n as f64] {
             let e = [mag * angle.cos(), mag * angle.sin()];
@@ -42,14 +45,21 @@ fn symmetric_ball_set_gives_force_along_the_symmetry_axis() {
             let across = -f[0] * angle.sin() + f[1] * angle.cos();
             assert!(loaded >= 1);
             assert!(along > 0.0, "N_b={n}: force not along e");
-            assert!(across.abs() < 1e-12 * along, "N_b={n}, axis {angle}: transverse force {across} vs {along}");
+            assert!(
+                across.abs() < 1e-12 * along,
+                "N_b={n}, axis {angle}: transverse force {across} vs {along}"
+            );
         }
         // A single loaded ball (e along ball 1, just past the clearance): F = K δ^1.5.
         let delta = 1e-6;
         let (f, loaded) = static_force(&params, [params.clearance / 2.0 + delta, 0.0]);
         if loaded == 1 {
             let want = params.stiffness * delta.powf(1.5);
-            assert!((f[0] - want).abs() < 1e-9 * want, "N_b={n}: {} vs {want}", f[0]);
+            assert!(
+                (f[0] - want).abs() < 1e-9 * want,
+                "N_b={n}: {} vs {want}",
+                f[0]
+            );
         }
     }
 }
@@ -59,12 +69,18 @@ fn symmetric_ball_set_gives_force_along_the_symmetry_axis() {
 #[test]
 fn huge_clearance_carries_no_load() {
     for location in [Location::CrankGround, Location::CrankRod] {
-        let mut case = CaseParams { location, ..CaseParams::default() };
+        let mut case = CaseParams {
+            location,
+            ..CaseParams::default()
+        };
         case.bearing.clearance = 0.015;
         let mut mech = SliderCrank::new(&case).unwrap();
         let y0 = mech.initial_state();
         let times: Vec<f64> = (0..=100).map(|k| 0.002 * k as f64 / 100.0).collect();
-        let settings = SolverSettings::new(Method::DormandPrince { rtol: 1e-10, atol: 1e-14 });
+        let settings = SolverSettings::new(Method::DormandPrince {
+            rtol: 1e-10,
+            atol: 1e-14,
+        });
         integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
             let s = m.sample(t, y)?;
             assert_eq!(s.loaded_balls, 0);
@@ -79,20 +95,43 @@ fn huge_clearance_carries_no_load() {
 /// under gravity: x = x0 + vx t, y = y0 + vy t − g t²/2, θ = θ0 + ω t.
 #[test]
 fn journal_without_contact_moves_as_a_free_body() {
-    let params = BearingParams { clearance: 0.015, ..BearingParams::default() };
+    let params = BearingParams {
+        clearance: 0.015,
+        ..BearingParams::default()
+    };
     let bearing = BallBearing::new(&params, ground_mount()).unwrap();
     let g = 9.81;
-    let mut sys = System::new(vec![Body { mass: 0.3, inertia: 1e-4 }], vec![], vec![bearing], Some(g), vec![0, 1, 2]).unwrap();
+    let mut sys = System::new(
+        vec![Body {
+            mass: 0.3,
+            inertia: 1e-4,
+        }],
+        vec![],
+        vec![bearing],
+        Some(g),
+        vec![0, 1, 2],
+    )
+    .unwrap();
     let (q0, qd0) = ([1e-4, -2e-4, 0.3], [0.02, 0.05, 31.4]);
     let y0 = sys.initial_state(&q0, &qd0);
     let times: Vec<f64> = (0..=50).map(|k| 0.03 * k as f64 / 50.0).collect(); // stays 3 mm inside the 7.5 mm radial gap
-    let settings = SolverSettings::new(Method::DormandPrince { rtol: 1e-8, atol: 1e-12 });
+    let settings = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-8,
+        atol: 1e-12,
+    });
     integrate(&mut sys, &settings, 0.0, &y0, &times, |s, t, y| {
         s.evaluate(t, y, false)?;
         let q = s.q();
-        let want = [q0[0] + qd0[0] * t, q0[1] + qd0[1] * t - 0.5 * g * t * t, q0[2] + qd0[2] * t];
+        let want = [
+            q0[0] + qd0[0] * t,
+            q0[1] + qd0[1] * t - 0.5 * g * t * t,
+            q0[2] + qd0[2] * t,
+        ];
         for (k, (got, want)) in q.iter().zip(want).enumerate() {
-            assert!((got - want).abs() < 1e-12 * (1.0 + want.abs()), "q[{k}] at t={t}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-12 * (1.0 + want.abs()),
+                "q[{k}] at t={t}: {got} vs {want}"
+            );
         }
         assert_eq!(s.elements()[0].reaction().loaded_balls, 0);
         Ok(())
@@ -111,14 +150,20 @@ fn mechanism_without_contact_conserves_x_momentum() {
     let mut mech = SliderCrank::new(&case).unwrap();
     let y0 = mech.initial_state();
     let times: Vec<f64> = (0..=100).map(|k| 0.01 * k as f64 / 100.0).collect();
-    let settings = SolverSettings::new(Method::DormandPrince { rtol: 1e-11, atol: 1e-15 });
+    let settings = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-11,
+        atol: 1e-15,
+    });
     let mut p0 = None;
     integrate(&mut mech, &settings, 0.0, &y0, &times, |mc, t, y| {
         mc.system_mut().evaluate(t, y, false)?;
         let qd = mc.system().qd();
         let p = m.crank_mass * qd[0] + m.rod_mass * qd[3] + m.slider_mass * qd[6];
         let p0 = *p0.get_or_insert(p);
-        assert!((p - p0).abs() < 1e-9, "x momentum drifted to {p} from {p0} at t={t}");
+        assert!(
+            (p - p0).abs() < 1e-9,
+            "x momentum drifted to {p} from {p0} at t={t}"
+        );
         Ok(())
     })
     .unwrap();

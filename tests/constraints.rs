@@ -7,14 +7,21 @@ use studyrun::solve::{integrate, Method, SolverSettings};
 #[test]
 fn residuals_stay_at_round_off_over_20_revolutions() {
     for location in [Location::CrankGround, Location::CrankRod] {
-        let mut case = CaseParams { location, rpm: 600.0, ..CaseParams::default() };
+        let mut case = CaseParams {
+            location,
+            rpm: 600.0,
+            ..CaseParams::default()
+        };
         case.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
         case.bearing.ball_count = 8;
         let mut mech = SliderCrank::new(&case).unwrap();
         let y0 = mech.initial_state();
         let duration = 20.0 * 60.0 / case.rpm;
         let times: Vec<f64> = (0..=4000).map(|k| duration * k as f64 / 4000.0).collect();
-        let settings = SolverSettings::new(Method::DormandPrince { rtol: 1e-8, atol: 1e-12 });
+        let settings = SolverSettings::new(Method::DormandPrince {
+            rtol: 1e-8,
+            atol: 1e-12,
+        });
         let (mut pos, mut vel) = (0.0f64, 0.0f64);
         integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
             m.system_mut().evaluate(t, y, false)?;

@@ -11,7 +11,10 @@ fn balance(case: &CaseParams, revolutions: f64) -> (f64, f64, f64) {
     let y0 = mech.initial_state();
     let duration = revolutions * 60.0 / case.rpm;
     let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
-    let settings = SolverSettings::new(Method::DormandPrince { rtol: 1e-12, atol: 1e-15 });
+    let settings = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-12,
+        atol: 1e-15,
+    });
     let mut start = None;
     let (mut worst, mut scale, mut dissipated) = (0.0f64, 0.0f64, 0.0);
     integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
@@ -19,7 +22,8 @@ fn balance(case: &CaseParams, revolutions: f64) -> (f64, f64, f64) {
         let s = m.system();
         let (ke, v, l) = (s.kinetic_energy(), s.potential_energy(t), s.ledger(y));
         let (ke0, v0) = *start.get_or_insert((ke, v));
-        let residual = l.driver_work - (ke - ke0 + v - v0 - l.explicit_potential_work + l.dissipated);
+        let residual =
+            l.driver_work - (ke - ke0 + v - v0 - l.explicit_potential_work + l.dissipated);
         worst = worst.max(residual.abs());
         scale = scale.max(l.driver_work.abs());
         dissipated = l.dissipated;
@@ -30,7 +34,11 @@ fn balance(case: &CaseParams, revolutions: f64) -> (f64, f64, f64) {
 }
 
 fn undamped(location: Location, waviness: bool) -> CaseParams {
-    let mut case = CaseParams { location, rpm: 600.0, ..CaseParams::default() };
+    let mut case = CaseParams {
+        location,
+        rpm: 600.0,
+        ..CaseParams::default()
+    };
     case.bearing.damping = 0.0;
     if waviness {
         case.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
@@ -48,7 +56,10 @@ fn undamped_balance_closes_with_and_without_waviness() {
             let (rel, dissipated, scale) = balance(&undamped(location, waviness), 2.0);
             println!("{location} waviness={waviness}: residual/driver work = {rel:.2e} (driver work scale {scale:.3} J)");
             assert_eq!(dissipated, 0.0);
-            assert!(rel < 1e-7, "{location} waviness={waviness}: balance residual {rel:e}");
+            assert!(
+                rel < 1e-7,
+                "{location} waviness={waviness}: balance residual {rel:e}"
+            );
         }
     }
 }

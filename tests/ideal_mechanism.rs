@@ -6,7 +6,11 @@ use std::f64::consts::PI;
 use studyrun::mechanism::{CaseParams, Location, MechanismParams, SliderCrank};
 
 fn ideal(rpm: f64) -> (SliderCrank, MechanismParams, f64) {
-    let case = CaseParams { location: Location::Ideal, rpm, ..CaseParams::default() };
+    let case = CaseParams {
+        location: Location::Ideal,
+        rpm,
+        ..CaseParams::default()
+    };
     let w = case.omega();
     (SliderCrank::new(&case).unwrap(), case.mechanism, w)
 }
@@ -21,7 +25,8 @@ fn ideal_mechanism_matches_closed_form_and_inverse_dynamics() {
         let (r, l) = (p.crank_length, p.rod_length);
         let period = 2.0 * PI / w;
         let n = 2000;
-        let (mut err_acc, mut peak_acc, mut err_t, mut peak_t, mut err_rx, mut peak_rx) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let (mut err_acc, mut peak_acc, mut err_t, mut peak_t, mut err_rx, mut peak_rx) =
+            (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for k in 0..=n {
             let t = 2.0 * period * k as f64 / n as f64;
             let s = mech.sample(t, &[]).unwrap();
@@ -33,7 +38,8 @@ fn ideal_mechanism_matches_closed_form_and_inverse_dynamics() {
                 + p.slider_mass * kin.acc[4] * kin.vel[4];
             let torque = power / w;
             // Momentum balance in x of the whole mechanism: only the crank pivot pushes in x.
-            let rx = -(p.crank_mass * kin.acc[0] + p.rod_mass * kin.acc[2] + p.slider_mass * kin.acc[4]);
+            let rx =
+                -(p.crank_mass * kin.acc[0] + p.rod_mass * kin.acc[2] + p.slider_mass * kin.acc[4]);
             err_acc = err_acc.max((s.slider_acceleration - kin.acc[4]).abs());
             peak_acc = peak_acc.max(kin.acc[4].abs());
             err_t = err_t.max((s.crank_moment - torque).abs());
@@ -59,7 +65,10 @@ fn initial_state_matches_paper_table_3() {
     let qd = mech.system().qd();
     let want = [0.0, 0.7854, 31.416, 0.0, 0.7854, -13.09, 0.0, 0.0, 0.0];
     for (k, (got, want)) in qd.iter().zip(want).enumerate() {
-        assert!((got - want).abs() < 5e-4 * want.abs().max(1.0), "qd[{k}] = {got}, paper {want}");
+        assert!(
+            (got - want).abs() < 5e-4 * want.abs().max(1.0),
+            "qd[{k}] = {got}, paper {want}"
+        );
     }
     assert!((qd[2] - w).abs() < 1e-12);
 }

@@ -13,8 +13,8 @@ mod waviness;
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
 use crate::error::ParamError;
-use crate::multibody::{add_point_force, ElementEnergy, ForceElement, Pose};
 use crate::multibody::BodyRef;
+use crate::multibody::{add_point_force, ElementEnergy, ForceElement, Pose};
 use waviness::RaceProfile;
 
 /// How contact damping acts on a loaded ball.
@@ -72,7 +72,11 @@ impl BearingParams {
     /// Checks every field; the error names the field, its value and what is allowed.
     pub fn validate(&self) -> Result<(), ParamError> {
         if self.ball_count < 3 {
-            return Err(ParamError::new("bearing.ball_count", self.ball_count, "an integer >= 3"));
+            return Err(ParamError::new(
+                "bearing.ball_count",
+                self.ball_count,
+                "an integer >= 3",
+            ));
         }
         positive("bearing.inner_race_diameter", self.inner_race_diameter)?;
         positive("bearing.outer_race_diameter", self.outer_race_diameter)?;
@@ -80,10 +84,15 @@ impl BearingParams {
             return Err(ParamError::new(
                 "bearing.inner_race_diameter",
                 self.inner_race_diameter,
-                format!("less than bearing.outer_race_diameter = {}", self.outer_race_diameter),
+                format!(
+                    "less than bearing.outer_race_diameter = {}",
+                    self.outer_race_diameter
+                ),
             ));
         }
-        if !self.clearance.is_finite() || self.clearance.abs() >= self.outer_race_diameter - self.inner_race_diameter {
+        if !self.clearance.is_finite()
+            || self.clearance.abs() >= self.outer_race_diameter - self.inner_race_diameter
+        {
             return Err(ParamError::new(
                 "bearing.clearance",
                 self.clearance,
@@ -183,7 +192,9 @@ impl BallBearing {
     pub fn new(params: &BearingParams, mount: Mounting) -> Result<Self, ParamError> {
         params.validate()?;
         let n = params.ball_count;
-        let angles: Vec<f64> = (0..n).map(|r| std::f64::consts::TAU * r as f64 / n as f64).collect();
+        let angles: Vec<f64> = (0..n)
+            .map(|r| std::f64::consts::TAU * r as f64 / n as f64)
+            .collect();
         let (di, dd) = (params.inner_race_diameter, params.outer_race_diameter);
         Ok(Self {
             mount,
@@ -216,7 +227,10 @@ impl BallBearing {
         let pose_h = Pose::of(m.housing, q, qd);
         let pose_j = Pose::of(m.journal, q, qd);
         let (p_h, p_j) = (pose_h.point(m.housing_point), pose_j.point(m.journal_point));
-        let (v_h, v_j) = (pose_h.point_velocity(m.housing_point), pose_j.point_velocity(m.journal_point));
+        let (v_h, v_j) = (
+            pose_h.point_velocity(m.housing_point),
+            pose_j.point_velocity(m.journal_point),
+        );
         let phi_c = self.cage_angle(pose_h.theta, pose_j.theta);
         let cage_rate = self.weight_journal * pose_j.omega + self.weight_housing * pose_h.omega;
         let (s, c) = phi_c.sin_cos();
@@ -239,7 +253,10 @@ impl BallBearing {
     /// Unit vector `n_r` of ball `r` for the cage rotation `cage = (cos φ_c, sin φ_c)`.
     fn ball_normal(&self, r: usize, cage: [f64; 2]) -> [f64; 2] {
         let d = self.ball_dir[r];
-        [cage[0] * d[0] - cage[1] * d[1], cage[1] * d[0] + cage[0] * d[1]]
+        [
+            cage[0] * d[0] - cage[1] * d[1],
+            cage[1] * d[0] + cage[0] * d[1],
+        ]
     }
 
     /// Force magnitude of a loaded ball with deflection `delta` > 0 (m) and

@@ -38,7 +38,11 @@ impl RaceWaviness {
     /// Checks every field; `prefix` names the race in the error.
     pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
         if !self.offset.is_finite() {
-            return Err(ParamError::new(format!("{prefix}.offset"), self.offset, "a finite length in m"));
+            return Err(ParamError::new(
+                format!("{prefix}.offset"),
+                self.offset,
+                "a finite length in m",
+            ));
         }
         if self.harmonics.len() > MAX_HARMONICS {
             return Err(ParamError::new(
@@ -49,11 +53,19 @@ impl RaceWaviness {
         }
         for (h, w) in self.harmonics.iter().enumerate() {
             if w.number == 0 {
-                return Err(ParamError::new(format!("{prefix}.harmonics[{h}].number"), w.number, "an integer >= 1"));
+                return Err(ParamError::new(
+                    format!("{prefix}.harmonics[{h}].number"),
+                    w.number,
+                    "an integer >= 1",
+                ));
             }
             super::non_negative(&format!("{prefix}.harmonics[{h}].amplitude"), w.amplitude)?;
             if !w.phase.is_finite() {
-                return Err(ParamError::new(format!("{prefix}.harmonics[{h}].phase"), w.phase, "a finite angle in rad"));
+                return Err(ParamError::new(
+                    format!("{prefix}.harmonics[{h}].phase"),
+                    w.phase,
+                    "a finite angle in rad",
+                ));
             }
         }
         Ok(())
@@ -81,10 +93,19 @@ pub(crate) type RacePhase = [[f64; 2]; MAX_HARMONICS];
 
 impl RaceProfile {
     pub(crate) fn new(w: &RaceWaviness, base_angles: &[f64]) -> Self {
-        let harmonics: Vec<Harmonic> = w.harmonics.iter().copied().filter(|h| h.amplitude > 0.0).collect();
+        let harmonics: Vec<Harmonic> = w
+            .harmonics
+            .iter()
+            .copied()
+            .filter(|h| h.amplitude > 0.0)
+            .collect();
         let rot = harmonics
             .iter()
-            .flat_map(|h| base_angles.iter().map(move |a| [(h.number as f64 * a).cos(), (h.number as f64 * a).sin()]))
+            .flat_map(|h| {
+                base_angles
+                    .iter()
+                    .map(move |a| [(h.number as f64 * a).cos(), (h.number as f64 * a).sin()])
+            })
             .collect();
         Self {
             offset: w.offset,

@@ -12,7 +12,6 @@ use std::str::FromStr;
 use crate::bearing::{BallBearing, BearingParams, Mounting};
 use crate::error::{ModelError, ParamError};
 use crate::multibody::{Body, BodyRef, Constraint, System};
-use crate::solve::OdeSystem as _;
 
 /// Standard gravity (m/s²), along −y when the effect is on.
 pub const GRAVITY: f64 = 9.81;
@@ -122,7 +121,10 @@ impl MechanismParams {
             return Err(ParamError::new(
                 "mechanism.rod_length",
                 self.rod_length,
-                format!("greater than mechanism.crank_length = {} (else the crank cannot turn)", self.crank_length),
+                format!(
+                    "greater than mechanism.crank_length = {} (else the crank cannot turn)",
+                    self.crank_length
+                ),
             ));
         }
         Ok(())
@@ -236,14 +238,38 @@ impl SliderCrank {
         let mp = &case.mechanism;
         let (l2, l3) = (mp.crank_length, mp.rod_length);
         let bodies = vec![
-            Body { mass: mp.crank_mass, inertia: mp.crank_inertia },
-            Body { mass: mp.rod_mass, inertia: mp.rod_inertia },
-            Body { mass: mp.slider_mass, inertia: mp.slider_inertia },
+            Body {
+                mass: mp.crank_mass,
+                inertia: mp.crank_inertia,
+            },
+            Body {
+                mass: mp.rod_mass,
+                inertia: mp.rod_inertia,
+            },
+            Body {
+                mass: mp.slider_mass,
+                inertia: mp.slider_inertia,
+            },
         ];
-        let crank_ground = Constraint::Revolute { i: BodyRef::Ground, s_i: [0.0, 0.0], j: CRANK, s_j: [-0.5 * l2, 0.0] };
-        let crank_rod = Constraint::Revolute { i: CRANK, s_i: [0.5 * l2, 0.0], j: ROD, s_j: [-0.5 * l3, 0.0] };
+        let crank_ground = Constraint::Revolute {
+            i: BodyRef::Ground,
+            s_i: [0.0, 0.0],
+            j: CRANK,
+            s_j: [-0.5 * l2, 0.0],
+        };
+        let crank_rod = Constraint::Revolute {
+            i: CRANK,
+            s_i: [0.5 * l2, 0.0],
+            j: ROD,
+            s_j: [-0.5 * l3, 0.0],
+        };
         let common = [
-            Constraint::Revolute { i: ROD, s_i: [0.5 * l3, 0.0], j: SLIDER, s_j: [0.0, 0.0] },
+            Constraint::Revolute {
+                i: ROD,
+                s_i: [0.5 * l3, 0.0],
+                j: SLIDER,
+                s_j: [0.0, 0.0],
+            },
             Constraint::Translational {
                 i: BodyRef::Ground,
                 s_i: [0.0, 0.0],
@@ -252,15 +278,35 @@ impl SliderCrank {
                 s_j: [0.0, 0.0],
                 theta0: 0.0,
             },
-            Constraint::Driver { body: CRANK, theta0: 0.0, omega: case.omega() },
+            Constraint::Driver {
+                body: CRANK,
+                theta0: 0.0,
+                omega: case.omega(),
+            },
         ];
         let gravity = case.gravity.then_some(GRAVITY);
 
         // The ideal mechanism gives the initial positions and velocities (paper Table 3).
-        let q_nominal = vec![0.5 * l2, 0.0, 0.0, l2 + 0.5 * l3, 0.0, 0.0, l2 + l3, 0.0, 0.0];
+        let q_nominal = vec![
+            0.5 * l2,
+            0.0,
+            0.0,
+            l2 + 0.5 * l3,
+            0.0,
+            0.0,
+            l2 + l3,
+            0.0,
+            0.0,
+        ];
         let mut ideal_constraints = vec![crank_ground, crank_rod];
         ideal_constraints.extend(common);
-        let mut ideal = System::new(bodies.clone(), ideal_constraints, Vec::new(), gravity, Vec::new())?;
+        let mut ideal = System::new(
+            bodies.clone(),
+            ideal_constraints,
+            Vec::new(),
+            gravity,
+            Vec::new(),
+        )?;
         ideal.initial_state(&q_nominal, &[0.0; 9]);
         ideal
             .evaluate(0.0, &[], false)
@@ -268,7 +314,16 @@ impl SliderCrank {
         let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
 
         let (kept, independent, bearing) = match case.location {
-            Location::Ideal => return Ok(Self::assemble(ideal, case.location, q0, qd0, Some(0), Some(1))),
+            Location::Ideal => {
+                return Ok(Self::assemble(
+                    ideal,
+                    case.location,
+                    q0,
+                    qd0,
+                    Some(0),
+                    Some(1),
+                ))
+            }
             Location::CrankGround => {
                 let mount = Mounting {
                     housing: BodyRef::Ground,
@@ -278,7 +333,11 @@ impl SliderCrank {
                     housing_theta0: 0.0,
                     journal_theta0: q0[2],
                 };
-                (crank_rod, vec![0, 1], BallBearing::new(&case.bearing, mount)?)
+                (
+                    crank_rod,
+                    vec![0, 1],
+                    BallBearing::new(&case.bearing, mount)?,
+                )
             }
             Location::CrankRod => {
                 let mount = Mounting {
@@ -289,7 +348,11 @@ impl SliderCrank {
                     housing_theta0: q0[2],
                     journal_theta0: q0[5],
                 };
-                (crank_ground, vec![3, 4], BallBearing::new(&case.bearing, mount)?)
+                (
+                    crank_ground,
+                    vec![3, 4],
+                    BallBearing::new(&case.bearing, mount)?,
+                )
             }
         };
         let mut constraints = vec![kept];
@@ -366,7 +429,11 @@ impl SliderCrank {
         let s = &self.system;
         let lambda = s.lambda();
         let joint = |row: Option<usize>| row.map(|r| [lambda[r], lambda[r + 1]]);
-        let reaction = s.elements().first().map(|b| b.reaction()).unwrap_or_default();
+        let reaction = s
+            .elements()
+            .first()
+            .map(|b| b.reaction())
+            .unwrap_or_default();
         Sample {
             slider_acceleration: s.qdd()[SLIDER_X],
             crank_moment: -lambda[self.driver_row],
@@ -385,5 +452,9 @@ impl crate::solve::OdeSystem for SliderCrank {
 
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
         self.system.rhs(t, y, dydt)
+    }
+
+    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        self.system.accept_step(t, y)
     }
 }

@@ -149,7 +149,12 @@ impl Constraint {
                 gamma[1] = aj[1] * wj2 - ai[1] * wi2;
             }
             Constraint::Translational {
-                i, s_i, n_i, j, s_j, ..
+                i,
+                s_i,
+                n_i,
+                j,
+                s_j,
+                ..
             } => {
                 let (pi, pj) = (Pose::of(i, q, qd), Pose::of(j, q, qd));
                 let (ai, aj, n) = (pi.rotate(s_i), pj.rotate(s_j), pi.rotate(n_i));

@@ -75,6 +75,11 @@ pub struct System<F> {
 #[derive(Debug, Clone)]
 struct Workspace {
     q: Vec<f64>,
+    /// Positions at the last accepted step: Newton's starting guess for every
+    /// evaluation, so that a wild trial stage (of a step that will be rejected)
+    /// can neither poison the next guess nor move Newton onto another branch of
+    /// the constraints (e.g. the mirrored rod).
+    q_anchor: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
@@ -109,15 +114,27 @@ impl<F: ForceElement> System<F> {
         let n = 3 * bodies.len();
         for (k, b) in bodies.iter().enumerate() {
             if !(b.mass.is_finite() && b.mass > 0.0) {
-                return Err(ParamError::new(format!("bodies[{k}].mass"), b.mass, "finite and > 0 kg"));
+                return Err(ParamError::new(
+                    format!("bodies[{k}].mass"),
+                    b.mass,
+                    "finite and > 0 kg",
+                ));
             }
             if !(b.inertia.is_finite() && b.inertia > 0.0) {
-                return Err(ParamError::new(format!("bodies[{k}].inertia"), b.inertia, "finite and > 0 kg m^2"));
+                return Err(ParamError::new(
+                    format!("bodies[{k}].inertia"),
+                    b.inertia,
+                    "finite and > 0 kg m^2",
+                ));
             }
         }
         if let Some(g) = gravity {
             if !g.is_finite() {
-                return Err(ParamError::new("gravity", g, "a finite acceleration in m/s^2"));
+                return Err(ParamError::new(
+                    "gravity",
+                    g,
+                    "a finite acceleration in m/s^2",
+                ));
             }
         }
         let mut row_start = Vec::with_capacity(constraints.len());
@@ -130,13 +147,21 @@ impl<F: ForceElement> System<F> {
             return Err(ParamError::new(
                 "independent",
                 format!("{} coordinates", independent.len()),
-                format!("exactly {} (3 x {} bodies - {m} constraint equations)", n.saturating_sub(m), bodies.len()),
+                format!(
+                    "exactly {} (3 x {} bodies - {m} constraint equations)",
+                    n.saturating_sub(m),
+                    bodies.len()
+                ),
             ));
         }
         let mut is_indep = vec![false; n];
         for &k in &independent {
             if k >= n || is_indep[k] {
-                return Err(ParamError::new("independent", k, format!("distinct coordinate indices below {n}")));
+                return Err(ParamError::new(
+                    "independent",
+                    k,
+                    format!("distinct coordinate indices below {n}"),
+                ));
             }
             is_indep[k] = true;
         }
@@ -144,6 +169,7 @@ impl<F: ForceElement> System<F> {
         let nz = independent.len();
         let ws = Workspace {
             q: vec![0.0; n],
+            q_anchor: vec![0.0; n],
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
             lambda: vec![0.0; m],
@@ -207,6 +233,7 @@ impl<F: ForceElement> System<F> {
     /// first guess for the dependent coordinates.
     pub fn initial_state(&mut self, q0: &[f64], qd0: &[f64]) -> Vec<f64> {
         self.ws.q.copy_from_slice(q0);
+        self.ws.q_anchor.copy_from_slice(q0);
         self.ws.qd.copy_from_slice(qd0);
         let mut y: Vec<f64> = self.independent.iter().map(|&k| q0[k]).collect();
         y.extend(self.independent.iter().map(|&k| qd0[k]));
@@ -254,6 +281,7 @@ impl<F: ForceElement> System<F> {
     /// and accelerations of every body, and the multipliers when `multipliers`.
     pub fn evaluate(&mut self, t: f64, y: &[f64], multipliers: bool) -> Result<(), ModelError> {
         let nz = self.dof();
+        self.ws.q.copy_from_slice(&self.ws.q_anchor);
         for (a, &k) in self.independent.iter().enumerate() {
             self.ws.q[k] = y[a];
             self.ws.qd[k] = y[nz + a];
@@ -283,10 +311,20 @@ impl<F: ForceElement> System<F> {
     /// Potential energy at the last evaluation: gravity plus the force elements' (J).
     pub fn potential_energy(&self, t: f64) -> f64 {
         let gravity: f64 = match self.gravity {
-            Some(g) => self.bodies.iter().enumerate().map(|(k, b)| b.mass * g * self.ws.q[3 * k + 1]).sum(),
+            Some(g) => self
+                .bodies
+                .iter()
+                .enumerate()
+                .map(|(k, b)| b.mass * g * self.ws.q[3 * k + 1])
+                .sum(),
             None => 0.0,
         };
-        gravity + self.elements.iter().map(|e| e.energy(t, &self.ws.q, &self.ws.qd).potential).sum::<f64>()
+        gravity
+            + self
+                .elements
+                .iter()
+                .map(|e| e.energy(t, &self.ws.q, &self.ws.qd).potential)
+                .sum::<f64>()
     }
 
     /// Max-norm of `Φ(q, t)` at the last evaluation, recomputed from scratch (m or rad).
@@ -340,7 +378,9 @@ impl<F: ForceElement> System<F> {
                     ws.jac_u[r * m + c] = ws.jac[r * n + k];
                 }
             }
-            ws.lu.factor(&ws.jac_u).map_err(|_| ModelError::SingularConstraints)?;
+            ws.lu
+                .factor(&ws.jac_u)
+                .map_err(|_| ModelError::SingularConstraints)?;
             if converged {
                 return Ok(());
             }
@@ -354,7 +394,9 @@ impl<F: ForceElement> System<F> {
                 step = step.max(d.abs());
             }
             if !step.is_finite() {
-                return Err(ModelError::NonFinite { what: "position (Newton update)" });
+                return Err(ModelError::NonFinite {
+                    what: "position (Newton update)",
+                });
             }
             converged = step <= NEWTON_STEP_TOL;
             if iteration + 1 == NEWTON_MAX_ITER {
@@ -377,7 +419,12 @@ impl<F: ForceElement> System<F> {
         }
         for r in 0..self.dependent.len() {
             let row = &ws.jac[r * n..(r + 1) * n];
-            ws.c_u[r] = -ws.phit[r] - self.independent.iter().map(|&k| row[k] * ws.qd[k]).sum::<f64>();
+            ws.c_u[r] = -ws.phit[r]
+                - self
+                    .independent
+                    .iter()
+                    .map(|&k| row[k] * ws.qd[k])
+                    .sum::<f64>();
         }
         ws.lu.solve_in_place(&mut ws.c_u, &mut ws.scratch_m);
         for (&k, v) in self.dependent.iter().zip(&ws.c_u) {
@@ -430,7 +477,12 @@ impl<F: ForceElement> System<F> {
             let ba = &ws.b_u[a * m..(a + 1) * m];
             for b in 0..nz {
                 let bb = &ws.b_u[b * m..(b + 1) * m];
-                let mut s: f64 = self.dependent.iter().enumerate().map(|(r, &k)| mass(k) * ba[r] * bb[r]).sum();
+                let mut s: f64 = self
+                    .dependent
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &k)| mass(k) * ba[r] * bb[r])
+                    .sum();
                 if a == b {
                     s += mass(self.independent[a]);
                 }
@@ -445,17 +497,25 @@ impl<F: ForceElement> System<F> {
                     .sum::<f64>();
         }
         if nz > 0 {
-            ws.reduced_lu.factor(&ws.reduced).map_err(|_| ModelError::SingularConstraints)?;
-            ws.reduced_lu.solve_in_place(&mut ws.reduced_rhs, &mut ws.scratch_z);
+            ws.reduced_lu
+                .factor(&ws.reduced)
+                .map_err(|_| ModelError::SingularConstraints)?;
+            ws.reduced_lu
+                .solve_in_place(&mut ws.reduced_rhs, &mut ws.scratch_z);
         }
         for (a, &k) in self.independent.iter().enumerate() {
             ws.qdd[k] = ws.reduced_rhs[a];
         }
         for (r, &k) in self.dependent.iter().enumerate() {
-            ws.qdd[k] = ws.c_u[r] + (0..nz).map(|a| ws.b_u[a * m + r] * ws.reduced_rhs[a]).sum::<f64>();
+            ws.qdd[k] = ws.c_u[r]
+                + (0..nz)
+                    .map(|a| ws.b_u[a * m + r] * ws.reduced_rhs[a])
+                    .sum::<f64>();
         }
         if ws.qdd.iter().any(|v| !v.is_finite()) {
-            return Err(ModelError::NonFinite { what: "acceleration" });
+            return Err(ModelError::NonFinite {
+                what: "acceleration",
+            });
         }
         Ok(())
     }
@@ -468,7 +528,8 @@ impl<F: ForceElement> System<F> {
             let mass = if k % 3 == 2 { b.inertia } else { b.mass };
             ws.lambda[r] = ws.forces[k] - mass * ws.qdd[k];
         }
-        ws.lu.solve_transpose_in_place(&mut ws.lambda, &mut ws.scratch_m);
+        ws.lu
+            .solve_transpose_in_place(&mut ws.lambda, &mut ws.scratch_m);
     }
 }
 
@@ -497,6 +558,17 @@ impl<F: ForceElement> OdeSystem for System<F> {
             dydt[2 * nz + 1] = rate;
             dydt[2 * nz + 2] = dissipation;
         }
+        Ok(())
+    }
+
+    /// Re-anchors Newton's starting guess at the accepted state's positions.
+    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        self.ws.q.copy_from_slice(&self.ws.q_anchor);
+        for (a, &k) in self.independent.iter().enumerate() {
+            self.ws.q[k] = y[a];
+        }
+        self.solve_positions(t)?;
+        self.ws.q_anchor.copy_from_slice(&self.ws.q);
         Ok(())
     }
 }

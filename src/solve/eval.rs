@@ -31,6 +31,12 @@ pub(crate) fn eval<S: OdeSystem>(
         .map_err(|source| SolveError::Model { t, source })
 }
 
+/// Tells the system a step ended at `(t, y)` ([`OdeSystem::accept_step`]).
+pub(crate) fn accept<S: OdeSystem>(sys: &mut S, t: f64, y: &[f64]) -> Result<(), SolveError> {
+    sys.accept_step(t, y)
+        .map_err(|source| SolveError::Model { t, source })
+}
+
 /// Index of the first NaN or infinite entry of `v`.
 pub(crate) fn first_non_finite(v: &[f64]) -> Option<usize> {
     v.iter().position(|x| !x.is_finite())

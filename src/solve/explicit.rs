@@ -4,7 +4,7 @@
 use super::control::{
     check_budget, check_step_size, initial_step, StepController, Tolerance, Verdict, PI_BETA,
 };
-use super::eval::{eval, first_non_finite, Problem};
+use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
 use super::tableau::{ExplicitTableau, DORMAND_PRINCE, RK4};
 use super::{OdeSystem, SolveError, Stats};
@@ -58,6 +58,10 @@ enum StepOutcome {
         /// First non-finite component.
         index: usize,
     },
+    /// The model could not be evaluated at a trial stage state (e.g. the
+    /// constraints have no solution there). Adaptive methods retry with a
+    /// smaller step; a fixed-step method has to give up.
+    ModelFailed(SolveError),
 }
 
 /// `out = y + h Σ_j w_j k_j` over the stage-major slopes `k`.
@@ -98,7 +102,9 @@ fn take_step<S: OdeSystem>(
         if let Some(index) = first_non_finite(state) {
             return Ok(StepOutcome::NonFinite { t: ti, index });
         }
-        eval(sys, ti, state, &mut rest[..n], stats)?;
+        if let Err(e) = eval(sys, ti, state, &mut rest[..n], stats) {
+            return Ok(StepOutcome::ModelFailed(e));
+        }
     }
     if !tab.fsal {
         combine(&w.y, h, tab.b, &w.k, &mut w.y_new);
@@ -172,7 +178,7 @@ where
         }
         check_step_size(t, h)?;
         let err = match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
-            StepOutcome::NonFinite { .. } => f64::NAN,
+            StepOutcome::NonFinite { .. } | StepOutcome::ModelFailed(_) => f64::NAN,
             StepOutcome::Done => {
                 for (m, e) in w.scratch.iter_mut().enumerate() {
                     let acc: f64 = tab
@@ -195,6 +201,7 @@ where
             Verdict::Accept(h_new) => {
                 stats.steps += 1;
                 let t_new = if last { p.t_end } else { t + h };
+                accept(sys, t_new, &w.y_new)?;
                 let ends = StepEnds {
                     t0: t,
                     h,
@@ -261,12 +268,13 @@ where
         if !have_f0 {
             eval(sys, t, &w.y, &mut w.k[..n], &mut stats)?;
         }
-        if let StepOutcome::NonFinite { t, index } =
-            take_step(sys, tab, (t, h), &mut w, &mut stats)?
-        {
-            return Err(SolveError::NonFinite { t, index });
+        match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
+            StepOutcome::NonFinite { t, index } => return Err(SolveError::NonFinite { t, index }),
+            StepOutcome::ModelFailed(e) => return Err(e),
+            StepOutcome::Done => {}
         }
         stats.steps += 1;
+        accept(sys, t_next, &w.y_new)?;
         have_f0 = samples.pending_before(t_next);
         if have_f0 {
             eval(sys, t_next, &w.y_new, &mut w.f_end, &mut stats)?;

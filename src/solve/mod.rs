@@ -18,6 +18,15 @@ pub trait OdeSystem {
     fn dim(&self) -> usize;
     /// Evaluates `f(t, y)` into `dydt` (both of length [`OdeSystem::dim`]).
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError>;
+
+    /// Called once after every accepted step with the new time (s) and state, before
+    /// any sample inside the step is served. Systems that keep a warm start for an
+    /// inner iteration (e.g. Newton on constraints) anchor it here, so trial stages
+    /// of rejected steps cannot steer later evaluations. Does nothing by default.
+    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        let _ = (t, y);
+        Ok(())
+    }
 }
 
 /// Which integrator to use, with its accuracy setting.

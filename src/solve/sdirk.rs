@@ -22,7 +22,7 @@
 use super::control::{
     check_budget, check_step_size, initial_step, StepController, Tolerance, Verdict, NON_FINITE_CUT,
 };
-use super::eval::{eval, first_non_finite, Problem};
+use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
 use super::tableau::{SdirkTableau, SDIRK4};
 use super::{OdeSystem, SolveError, Stats};
@@ -150,7 +150,8 @@ enum StageOutcome {
     Converged { theta_max: f64 },
     /// Newton diverged or would not converge within [`MAX_NEWTON`] iterations.
     Diverged,
-    /// A stage state or slope became NaN or infinite.
+    /// A stage state or slope became NaN or infinite, or the model could not be
+    /// evaluated at a stage state; either way the step is retried smaller.
     NonFinite,
 }
 
@@ -194,7 +195,9 @@ fn solve_stages<S: OdeSystem>(
             if first_non_finite(&w.stage).is_some() {
                 return Ok(StageOutcome::NonFinite);
             }
-            eval(sys, ti, &w.stage, &mut w.f_eval, stats)?;
+            if eval(sys, ti, &w.stage, &mut w.f_eval, stats).is_err() {
+                return Ok(StageOutcome::NonFinite);
+            }
             for m in 0..n {
                 w.delta[m] = w.r[m] + h * g * w.f_eval[m] - w.z[m];
             }
@@ -322,6 +325,7 @@ where
                     Verdict::Accept(h_new) => {
                         stats.steps += 1;
                         let t_new = if last { p.t_end } else { t + h };
+                        accept(sys, t_new, &w.y_new)?;
                         let ends = StepEnds {
                             t0: t,
                             h,

@@ -25,9 +25,27 @@ pub fn ideal_kinematics(r: f64, l: f64, th: f64, w: f64) -> IdealKinematics {
     let th3 = (-r * s / l).asin();
     let th3_1 = -r * c / big_s;
     let th3_2 = r * s / big_s - r.powi(3) * s * c * c / big_s.powi(3);
-    let pos = [0.5 * r * c, 0.5 * r * s, r * c + 0.5 * big_s, 0.5 * r * s, r * c + big_s];
-    let d1 = [-0.5 * r * s, 0.5 * r * c, -r * s + 0.5 * s1, 0.5 * r * c, -r * s + s1];
-    let d2 = [-0.5 * r * c, -0.5 * r * s, -r * c + 0.5 * s2, -0.5 * r * s, -r * c + s2];
+    let pos = [
+        0.5 * r * c,
+        0.5 * r * s,
+        r * c + 0.5 * big_s,
+        0.5 * r * s,
+        r * c + big_s,
+    ];
+    let d1 = [
+        -0.5 * r * s,
+        0.5 * r * c,
+        -r * s + 0.5 * s1,
+        0.5 * r * c,
+        -r * s + s1,
+    ];
+    let d2 = [
+        -0.5 * r * c,
+        -0.5 * r * s,
+        -r * c + 0.5 * s2,
+        -0.5 * r * s,
+        -r * c + s2,
+    ];
     IdealKinematics {
         pos,
         vel: d1.map(|d| d * w),
