@@ -287,6 +287,10 @@ impl<F: ForceElement> System<F> {
             self.ws.qd[k] = y[nz + a];
         }
         self.solve_positions(t)?;
+        if nz == 0 {
+            // A fully constrained system has no trial states: every evaluation is real.
+            self.ws.q_anchor.copy_from_slice(&self.ws.q);
+        }
         self.solve_velocities();
         self.solve_accelerations(t)?;
         if multipliers {
@@ -457,8 +461,8 @@ impl<F: ForceElement> System<F> {
         // B_u = −Φu⁻¹ Φz and c_u = Φu⁻¹ γ.
         for (a, &kz) in self.independent.iter().enumerate() {
             let col = &mut ws.b_u[a * m..(a + 1) * m];
-            for r in 0..m {
-                col[r] = -ws.jac[r * n + kz];
+            for (r, c) in col.iter_mut().enumerate() {
+                *c = -ws.jac[r * n + kz];
             }
             ws.lu.solve_in_place(col, &mut ws.scratch_m);
         }

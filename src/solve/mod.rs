@@ -149,7 +149,7 @@ mod validate;
 ///
 /// Sample times must be finite, `>= t0` and non-decreasing; repeated times are each
 /// observed. Empty `sample_times` returns zero [`Stats`] without calling anything.
-/// A system of dimension 0 only sees the observer calls.
+/// A system of dimension 0 sees [`OdeSystem::accept_step`] and the observer at each sample time.
 ///
 /// # Errors
 /// * [`SolveError::InvalidSetting`], naming the field and its value, for a tolerance,
@@ -182,7 +182,16 @@ where
         return Ok(Stats::default());
     };
     let mut samples = output::Samples::new(sample_times, observe);
-    if y0.is_empty() || t_end == t0 {
+    if y0.is_empty() {
+        // Nothing to integrate (e.g. a fully constrained mechanism): each sample
+        // time is a "step" the system is told about before it is observed.
+        for &t in sample_times {
+            eval::accept(sys, t, y0)?;
+            samples.serve(sys, t, y0, &mut [], |_, _| {})?;
+        }
+        return Ok(Stats::default());
+    }
+    if t_end == t0 {
         // Nothing to integrate: the state is `y0` at every sample time.
         samples.serve(sys, t_end, y0, &mut [], |_, _| {})?;
         return Ok(Stats::default());
