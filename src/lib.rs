@@ -24,3 +24,4 @@ pub mod metrics;
 pub mod multibody;
 pub mod simulate;
 pub mod solve;
+pub mod study;

@@ -168,6 +168,8 @@ where
     )?;
     let mut control = StepController::new(tab.embedded_order, PI_BETA);
     let mut t = p.t0;
+    // The last model failure of a rejected step, reported if the step size underflows.
+    let mut model_failure: Option<SolveError> = None;
     loop {
         check_budget(t, &stats, p.max_steps)?;
         h = h.min(p.max_step);
@@ -176,9 +178,13 @@ where
         if last {
             h = p.t_end - t;
         }
-        check_step_size(t, h)?;
+        check_step_size(t, h).map_err(|e| model_failure.take().unwrap_or(e))?;
         let err = match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
-            StepOutcome::NonFinite { .. } | StepOutcome::ModelFailed(_) => f64::NAN,
+            StepOutcome::NonFinite { .. } => f64::NAN,
+            StepOutcome::ModelFailed(e) => {
+                model_failure = Some(e);
+                f64::NAN
+            }
             StepOutcome::Done => {
                 for (m, e) in w.scratch.iter_mut().enumerate() {
                     let acc: f64 = tab
@@ -200,6 +206,7 @@ where
             }
             Verdict::Accept(h_new) => {
                 stats.steps += 1;
+                model_failure = None;
                 let t_new = if last { p.t_end } else { t + h };
                 accept(sys, t_new, &w.y_new)?;
                 let ends = StepEnds {

@@ -156,7 +156,9 @@ mod validate;
 ///   step or `max_step` that is not positive and finite (`max_step` may be
 ///   infinite), a non-finite `t0` or `y0`, a `y0` whose length is not
 ///   [`OdeSystem::dim`], or bad sample times; checked before anything runs.
-/// * [`SolveError::Model`] when `f` or the observer fails (with the time of the call).
+/// * [`SolveError::Model`] when the observer fails, when `f` fails for RK4, or when
+///   `f` keeps failing for an adaptive method until its step size underflows (a
+///   trial stage the model cannot evaluate is first retried with a step cut by 10).
 /// * [`SolveError::StepBudgetExhausted`] after `settings.max_steps` steps (accepted
 ///   plus rejected); for [`Method::Rk4`] before starting, if the run needs more.
 /// * [`SolveError::StepSizeTooSmall`] when an adaptive step falls below `16 ε |t|`.

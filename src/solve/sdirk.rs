@@ -150,9 +150,11 @@ enum StageOutcome {
     Converged { theta_max: f64 },
     /// Newton diverged or would not converge within [`MAX_NEWTON`] iterations.
     Diverged,
-    /// A stage state or slope became NaN or infinite, or the model could not be
-    /// evaluated at a stage state; either way the step is retried smaller.
+    /// A stage state or slope became NaN or infinite; the step is retried smaller.
     NonFinite,
+    /// The model could not be evaluated at a stage state; the step is retried
+    /// smaller, and the error is reported if the step size underflows.
+    ModelFailed(SolveError),
 }
 
 /// Solves the stage equations of a step of size `h` (s) from `(t, w.y)` with the
@@ -195,8 +197,8 @@ fn solve_stages<S: OdeSystem>(
             if first_non_finite(&w.stage).is_some() {
                 return Ok(StageOutcome::NonFinite);
             }
-            if eval(sys, ti, &w.stage, &mut w.f_eval, stats).is_err() {
-                return Ok(StageOutcome::NonFinite);
+            if let Err(e) = eval(sys, ti, &w.stage, &mut w.f_eval, stats) {
+                return Ok(StageOutcome::ModelFailed(e));
             }
             for m in 0..n {
                 w.delta[m] = w.r[m] + h * g * w.f_eval[m] - w.z[m];
@@ -277,6 +279,8 @@ where
     // Step size of the current LU factors (NaN: none valid).
     let mut h_factored = f64::NAN;
     let mut t = p.t0;
+    // The last model failure of a rejected step, reported if the step size underflows.
+    let mut model_failure: Option<SolveError> = None;
     loop {
         check_budget(t, &stats, p.max_steps)?;
         h = h.min(p.max_step);
@@ -284,7 +288,7 @@ where
         if last {
             h = p.t_end - t;
         }
-        check_step_size(t, h)?;
+        check_step_size(t, h).map_err(|e| model_failure.take().unwrap_or(e))?;
         if need_jac {
             w.jacobian(sys, t, &mut stats)?;
             need_jac = false;
@@ -343,6 +347,7 @@ where
                         std::mem::swap(&mut w.y, &mut w.y_new);
                         std::mem::swap(&mut w.f_cur, &mut w.f_end);
                         t = t_new;
+                        model_failure = None;
                         need_jac = theta_max > THETA_REUSE;
                         jac_current = false;
                         // Keep the LU factors if only a small increase is proposed.
@@ -356,6 +361,10 @@ where
             }
             StageOutcome::Diverged => NEWTON_FAIL_CUT,
             StageOutcome::NonFinite => NON_FINITE_CUT,
+            StageOutcome::ModelFailed(e) => {
+                model_failure = Some(e);
+                NON_FINITE_CUT
+            }
         };
         stats.rejected += 1;
         control.note_failure();

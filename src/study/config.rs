@@ -1,0 +1,195 @@
+//! The serde mirror of a grid file: what the YAML may contain, with the source
+//! location of every value kept for error messages. Unknown keys are refused.
+
+use indexmap::IndexMap;
+use serde::Deserialize;
+use serde_saphyr::Spanned;
+
+/// A scalar as written: a number (SI) or a string (a number with a unit, or a name).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Scalar {
+    /// A plain number, in the parameter's base unit.
+    Num(f64),
+    /// A string: `"40 um"`, or a name such as `crank_ground`.
+    Text(String),
+}
+
+impl std::fmt::Display for Scalar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Scalar::Num(v) => write!(f, "{v}"),
+            Scalar::Text(s) => write!(f, "\"{s}\""),
+        }
+    }
+}
+
+/// A value with its place in the file.
+pub type S<T> = Spanned<T>;
+/// Grid axes or a zip group: parameter name → list of values, in file order.
+pub type Axes = IndexMap<String, S<Vec<S<Scalar>>>>;
+
+/// The whole grid file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridFile {
+    /// Study name.
+    pub name: S<String>,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Simulated time per case (s).
+    pub duration: S<Scalar>,
+    /// Output samples per second (Hz).
+    pub sample_rate: S<Scalar>,
+    /// Effects simulated: any of clearance, waviness, damping, gravity.
+    #[serde(default)]
+    pub effects: Option<S<Vec<S<String>>>>,
+    /// Body parameter overrides.
+    #[serde(default)]
+    pub mechanism: Option<MechanismSection>,
+    /// Bearing parameter overrides.
+    #[serde(default)]
+    pub bearing: Option<BearingSection>,
+    /// Crank speed when not a grid axis.
+    #[serde(default)]
+    pub rpm: Option<S<Scalar>>,
+    /// Bearing location when not a grid axis.
+    #[serde(default)]
+    pub location: Option<S<Scalar>>,
+    /// Integrator settings.
+    #[serde(default)]
+    pub solver: Option<SolverSection>,
+    /// Time skipped before metrics and spectra (s), or `auto`.
+    #[serde(default)]
+    pub transient: Option<S<Scalar>>,
+    /// Spectrum settings.
+    #[serde(default)]
+    pub spectra: Option<SpectraSection>,
+    /// File storage settings.
+    #[serde(default)]
+    pub output: Option<OutputSection>,
+    /// Largest number of cases accepted (default 100 000).
+    #[serde(default)]
+    pub max_cases: Option<S<u64>>,
+    /// Axes expanded as a cartesian product (first axis slowest).
+    #[serde(default)]
+    pub grid: Axes,
+    /// Groups of axes that vary together (equal lengths within a group).
+    #[serde(default)]
+    pub zip: Vec<S<Axes>>,
+    /// Explicit extra cases: parameter → value, over the base.
+    #[serde(default)]
+    pub cases: Vec<S<IndexMap<String, S<Scalar>>>>,
+}
+
+/// `mechanism:` overrides (each optional).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct MechanismSection {
+    pub crank_length: Option<S<Scalar>>,
+    pub rod_length: Option<S<Scalar>>,
+    pub crank_mass: Option<S<Scalar>>,
+    pub crank_inertia: Option<S<Scalar>>,
+    pub rod_mass: Option<S<Scalar>>,
+    pub rod_inertia: Option<S<Scalar>>,
+    pub slider_mass: Option<S<Scalar>>,
+    pub slider_inertia: Option<S<Scalar>>,
+}
+
+/// `bearing:` overrides (each optional).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct BearingSection {
+    pub ball_count: Option<S<Scalar>>,
+    pub clearance: Option<S<Scalar>>,
+    /// A number/quantity (N/m^1.5) or `harris` (computed from `geometry`).
+    pub stiffness: Option<S<Scalar>>,
+    pub damping: Option<S<Scalar>>,
+    /// `compression_only` (default) or `two_sided`.
+    pub damping_model: Option<S<String>>,
+    pub inner_race_diameter: Option<S<Scalar>>,
+    pub outer_race_diameter: Option<S<Scalar>>,
+    /// Waviness of both races.
+    pub waviness: Option<WavinessSection>,
+    pub inner_waviness: Option<WavinessSection>,
+    pub outer_waviness: Option<WavinessSection>,
+    /// Contact geometry for `stiffness: harris`.
+    pub geometry: Option<GeometrySection>,
+}
+
+/// One race's waviness: a single harmonic (`number`, `amplitude`, `phase`) or a list.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct WavinessSection {
+    pub number: Option<S<Scalar>>,
+    pub amplitude: Option<S<Scalar>>,
+    pub phase: Option<S<Scalar>>,
+    pub offset: Option<S<Scalar>>,
+    pub harmonics: Option<S<Vec<HarmonicSection>>>,
+}
+
+/// One harmonic in a `harmonics:` list.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct HarmonicSection {
+    pub number: S<Scalar>,
+    pub amplitude: S<Scalar>,
+    #[serde(default)]
+    pub phase: Option<S<Scalar>>,
+}
+
+/// Ball/groove geometry for Harris's stiffness (defaults: SKF 98205, f = 0.52).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct GeometrySection {
+    pub ball_diameter: Option<S<Scalar>>,
+    pub pitch_diameter: Option<S<Scalar>>,
+    pub inner_conformity: Option<S<Scalar>>,
+    pub outer_conformity: Option<S<Scalar>>,
+    pub youngs_modulus: Option<S<Scalar>>,
+    pub poisson_ratio: Option<S<Scalar>>,
+}
+
+/// `solver:` settings.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct SolverSection {
+    /// `dopri5` (default), `rk4` or `sdirk4`.
+    pub method: Option<S<String>>,
+    pub rtol: Option<S<Scalar>>,
+    pub atol: Option<S<Scalar>>,
+    /// RK4 step (s).
+    pub step: Option<S<Scalar>>,
+    pub max_steps: Option<S<u64>>,
+    /// Largest adaptive step (s).
+    pub max_step: Option<S<Scalar>>,
+}
+
+/// `spectra:` settings.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct SpectraSection {
+    /// `hann` (default) or `rectangular`.
+    pub window: Option<S<String>>,
+    /// Channels to transform (default: slider_acceleration, crank_moment, bearing_force).
+    pub channels: Option<S<Vec<S<String>>>>,
+}
+
+/// `output:` settings.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct OutputSection {
+    /// `float64` (default) or `float32`.
+    pub dtype: Option<S<String>>,
+    /// Deflate level 0..=9 (default 4; 0 = uncompressed).
+    pub compression: Option<S<u8>>,
+}

@@ -1,0 +1,856 @@
+//! From the serde mirror to a validated [`Study`]: units, effects, expansion, checks.
+
+use std::path::Path;
+
+use serde_saphyr::Location;
+
+use super::config::{GridFile, Scalar, WavinessSection, S};
+use super::params::{lookup, PARAMETERS};
+use super::units::Dimension;
+use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
+use crate::bearing::stiffness::ContactGeometry;
+use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
+use crate::mechanism::{CaseParams, Location as Site};
+use crate::simulate::{Sampling, CHANNELS};
+use crate::solve::{Method, SolverSettings};
+
+/// Which effects a study simulates; anything off is not computed at all.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Effects {
+    /// Diametral clearance (off: zero clearance).
+    pub clearance: bool,
+    /// Raceway waviness (off: perfect races, no per-ball waviness terms).
+    pub waviness: bool,
+    /// Contact damping (off: C = 0).
+    pub damping: bool,
+    /// Gravity along −y.
+    pub gravity: bool,
+}
+
+impl Effects {
+    const NAMES: [&'static str; 4] = ["clearance", "waviness", "damping", "gravity"];
+
+    /// The names of the effects that are on.
+    pub fn names(&self) -> Vec<&'static str> {
+        let on = [self.clearance, self.waviness, self.damping, self.gravity];
+        Self::NAMES
+            .iter()
+            .zip(on)
+            .filter(|(_, o)| *o)
+            .map(|(n, _)| *n)
+            .collect()
+    }
+
+    /// The effect a parameter belongs to, if switching that effect off forbids it.
+    fn governing(&self, param: &str) -> Option<(&'static str, bool)> {
+        if param.contains("waviness") {
+            Some(("waviness", self.waviness))
+        } else if param == "damping" {
+            Some(("damping", self.damping))
+        } else if param == "clearance" {
+            Some(("clearance", self.clearance))
+        } else {
+            None
+        }
+    }
+}
+
+/// Where each parameter of a case was set: (parameter, YAML field, line/column).
+type Provenance = Vec<(&'static str, String, (u64, u64))>;
+
+fn at(l: &Location) -> (u64, u64) {
+    (l.line(), l.column())
+}
+
+struct Ctx<'a> {
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn err(
+        &self,
+        place: Option<(u64, u64)>,
+        field: &str,
+        message: impl Into<String>,
+    ) -> StudyError {
+        StudyError {
+            path: self.path.to_path_buf(),
+            location: place,
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// A quantity in `dim`'s base unit, finite.
+    fn quantity(&self, v: &S<Scalar>, dim: Dimension, field: &str) -> Result<f64, StudyError> {
+        let place = Some(at(&v.referenced));
+        let x = match &v.value {
+            Scalar::Num(x) => *x,
+            Scalar::Text(t) => dim.parse(t).map_err(|m| self.err(place, field, m))?,
+        };
+        if !x.is_finite() {
+            return Err(self.err(
+                place,
+                field,
+                format!("{} is not finite; expected {}", v.value, dim.accepted()),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// Sets parameter `name` (or `location`) of `case` from `v`, recording where.
+    fn apply(
+        &self,
+        case: &mut CaseParams,
+        name: &str,
+        v: &S<Scalar>,
+        field: &str,
+        effects: &Effects,
+        prov: &mut Provenance,
+    ) -> Result<(), StudyError> {
+        let place = at(&v.referenced);
+        if let Some((effect, false)) = effects.governing(name) {
+            return Err(self.err(
+                Some(place),
+                field,
+                format!("the {effect} effect is off (effects: [{}]); add `{effect}` to `effects` to set it", effects.names().join(", ")),
+            ));
+        }
+        if name == "location" {
+            let Scalar::Text(t) = &v.value else {
+                return Err(self.err(
+                    Some(place),
+                    field,
+                    format!(
+                        "{} is not a location; expected one of ideal, crank_ground, crank_rod",
+                        v.value
+                    ),
+                ));
+            };
+            case.location = t
+                .parse()
+                .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.allowed))?;
+            prov.push(("location", field.to_string(), place));
+            return Ok(());
+        }
+        let param = lookup(name).ok_or_else(|| {
+            let names: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
+            self.err(
+                Some(place),
+                field,
+                format!(
+                    "unknown parameter; expected location or one of: {}",
+                    names.join(", ")
+                ),
+            )
+        })?;
+        let x = self.quantity(v, param.dimension, field)?;
+        if param.integer && (x.fract() != 0.0 || x < 0.0 || x > u32::MAX as f64) {
+            return Err(self.err(
+                Some(place),
+                field,
+                format!("{} is not allowed: a whole number >= 0", v.value),
+            ));
+        }
+        param.set(case, x);
+        prov.push((param.name, field.to_string(), place));
+        Ok(())
+    }
+}
+
+/// Builds the study from grid-file text.
+pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
+    let ctx = Ctx { path };
+    let file: GridFile =
+        serde_saphyr::from_str(text).map_err(|e| ctx.err(None, "", e.to_string()))?;
+
+    let sampling = Sampling {
+        duration: ctx.quantity(&file.duration, Dimension::Time, "duration")?,
+        sample_rate: ctx.quantity(&file.sample_rate, Dimension::Frequency, "sample_rate")?,
+    };
+    sampling.validate().map_err(|e| {
+        ctx.err(
+            Some(at(if e.field == "duration" {
+                &file.duration.referenced
+            } else {
+                &file.sample_rate.referenced
+            })),
+            &e.field,
+            e.allowed,
+        )
+    })?;
+
+    let effects = effects(&ctx, &file)?;
+    let mut prov = Provenance::new();
+    let base = base_case(&ctx, &file, &effects, &mut prov)?;
+    let solver = solver(&ctx, &file)?;
+    let max_cases = file
+        .max_cases
+        .as_ref()
+        .map(|m| m.value)
+        .unwrap_or(DEFAULT_MAX_CASES);
+
+    // Axes: each grid axis is a group of one; zip groups vary together.
+    let mut groups: Vec<Vec<(&String, &S<Vec<S<Scalar>>>, String)>> = file
+        .grid
+        .iter()
+        .map(|(name, values)| vec![(name, values, format!("grid.{name}"))])
+        .collect();
+    for (g, group) in file.zip.iter().enumerate() {
+        let axes: Vec<_> = group
+            .value
+            .iter()
+            .map(|(n, v)| (n, v, format!("zip[{g}].{n}")))
+            .collect();
+        if let Some(&(_, first, _)) = axes.first() {
+            for (_, v, field) in &axes {
+                if v.value.len() != first.value.len() {
+                    return Err(ctx.err(
+                        Some(at(&v.referenced)),
+                        field,
+                        format!("{} values, but `{}` in the same zip group has {}; zipped axes need equal lengths", v.value.len(), axes[0].0, first.value.len()),
+                    ));
+                }
+            }
+            groups.push(axes);
+        }
+    }
+    let mut axes_names = Vec::new();
+    for group in &groups {
+        for (name, values, field) in group {
+            if values.value.is_empty() {
+                return Err(ctx.err(
+                    Some(at(&values.referenced)),
+                    field,
+                    "an axis needs at least one value",
+                ));
+            }
+            if axes_names.contains(*name) {
+                return Err(ctx.err(
+                    Some(at(&values.referenced)),
+                    field,
+                    "this parameter is already an axis",
+                ));
+            }
+            axes_names.push((*name).clone());
+        }
+    }
+    if groups.is_empty() && file.cases.is_empty() {
+        return Err(ctx.err(
+            None,
+            "grid",
+            "the study is empty: give `grid:` axes, `zip:` groups or `cases:`",
+        ));
+    }
+    let product = groups
+        .iter()
+        .try_fold(if groups.is_empty() { 0u64 } else { 1u64 }, |acc, g| {
+            acc.checked_mul(g[0].1.value.len() as u64)
+        });
+    let total = product.and_then(|p| p.checked_add(file.cases.len() as u64));
+    match total {
+        Some(t) if t <= max_cases => {}
+        _ => {
+            return Err(ctx.err(
+                None,
+                "grid",
+                format!(
+                    "the grid expands to {} cases, more than max_cases = {max_cases}; raise `max_cases` if you mean it",
+                    total.map_or("over 2^64".to_string(), |t| t.to_string())
+                ),
+            ))
+        }
+    }
+
+    let mut cases = Vec::new();
+    let count = product.unwrap_or(0);
+    for i in 0..count {
+        let mut params = base.clone();
+        let mut case_prov = prov.clone();
+        let mut rest = i;
+        let mut picks = vec![0usize; groups.len()];
+        for (g, group) in groups.iter().enumerate().rev() {
+            let len = group[0].1.value.len() as u64;
+            picks[g] = (rest % len) as usize;
+            rest /= len;
+        }
+        for (group, &k) in groups.iter().zip(&picks) {
+            for (name, values, field) in group {
+                ctx.apply(
+                    &mut params,
+                    name,
+                    &values.value[k],
+                    &format!("{field}[{k}]"),
+                    &effects,
+                    &mut case_prov,
+                )?;
+            }
+        }
+        cases.push(finish_case(
+            &ctx,
+            params,
+            &effects,
+            &case_prov,
+            cases.len() as u64,
+        )?);
+    }
+    for (c, explicit) in file.cases.iter().enumerate() {
+        let mut params = base.clone();
+        let mut case_prov = prov.clone();
+        for (name, v) in &explicit.value {
+            ctx.apply(
+                &mut params,
+                name,
+                v,
+                &format!("cases[{c}].{name}"),
+                &effects,
+                &mut case_prov,
+            )?;
+        }
+        cases.push(finish_case(
+            &ctx,
+            params,
+            &effects,
+            &case_prov,
+            cases.len() as u64,
+        )?);
+    }
+
+    let mut references: Vec<CaseParams> = Vec::new();
+    for case in &mut cases {
+        let reference = reference_of(&case.params);
+        case.reference = match references.iter().position(|r| *r == reference) {
+            Some(k) => k,
+            None => {
+                references.push(reference);
+                references.len() - 1
+            }
+        };
+    }
+
+    let min_rpm = cases
+        .iter()
+        .map(|c| c.params.rpm)
+        .fold(f64::INFINITY, f64::min);
+    let transient = match &file.transient {
+        None => (60.0 / min_rpm).min(0.5 * sampling.duration),
+        Some(S {
+            value: Scalar::Text(t),
+            ..
+        }) if t == "auto" => (60.0 / min_rpm).min(0.5 * sampling.duration),
+        Some(v) => {
+            let x = ctx.quantity(v, Dimension::Time, "transient")?;
+            if !(0.0..sampling.duration).contains(&x) {
+                return Err(ctx.err(
+                    Some(at(&v.referenced)),
+                    "transient",
+                    format!(
+                        "{x} s is not allowed: >= 0 and below duration = {} s",
+                        sampling.duration
+                    ),
+                ));
+            }
+            x
+        }
+    };
+
+    let spectra = file.spectra.unwrap_or_default();
+    let window = match &spectra.window {
+        None => "hann".to_string(),
+        Some(w) if w.value == "hann" || w.value == "rectangular" => w.value.clone(),
+        Some(w) => {
+            return Err(ctx.err(
+                Some(at(&w.referenced)),
+                "spectra.window",
+                format!(
+                    "`{}` is not a window; expected hann or rectangular",
+                    w.value
+                ),
+            ))
+        }
+    };
+    let spectrum_channels = match &spectra.channels {
+        None => vec!["slider_acceleration", "crank_moment", "bearing_force"],
+        Some(list) => list
+            .value
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                CHANNELS
+                    .iter()
+                    .find(|ch| ch.name == c.value)
+                    .map(|ch| ch.name)
+                    .ok_or_else(|| {
+                        let names: Vec<&str> = CHANNELS.iter().map(|ch| ch.name).collect();
+                        ctx.err(
+                            Some(at(&c.referenced)),
+                            &format!("spectra.channels[{k}]"),
+                            format!(
+                                "unknown channel `{}`; expected one of: {}",
+                                c.value,
+                                names.join(", ")
+                            ),
+                        )
+                    })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    let output = file.output.unwrap_or_default();
+    let float32 = match &output.dtype {
+        None => false,
+        Some(d) if d.value == "float64" => false,
+        Some(d) if d.value == "float32" => true,
+        Some(d) => {
+            return Err(ctx.err(
+                Some(at(&d.referenced)),
+                "output.dtype",
+                format!("`{}` is not allowed: float64 or float32", d.value),
+            ))
+        }
+    };
+    let compression = match &output.compression {
+        None => 4,
+        Some(c) if c.value <= 9 => c.value,
+        Some(c) => {
+            return Err(ctx.err(
+                Some(at(&c.referenced)),
+                "output.compression",
+                format!("{} is not allowed: a deflate level 0..=9", c.value),
+            ))
+        }
+    };
+
+    Ok(Study {
+        name: file.name.value,
+        description: file.description.unwrap_or_default(),
+        source: text.to_string(),
+        path: path.to_path_buf(),
+        sampling,
+        solver,
+        effects,
+        transient,
+        window,
+        spectrum_channels,
+        float32,
+        compression,
+        axes: axes_names,
+        cases,
+        references,
+    })
+}
+
+/// The ideal mechanism a case is compared with: same bodies, speed and gravity.
+fn reference_of(p: &CaseParams) -> CaseParams {
+    CaseParams {
+        location: Site::Ideal,
+        bearing: Default::default(),
+        ..p.clone()
+    }
+}
+
+/// Applies the effects that are off, then validates, pointing errors at the YAML.
+fn finish_case(
+    ctx: &Ctx<'_>,
+    mut params: CaseParams,
+    effects: &Effects,
+    prov: &Provenance,
+    id: u64,
+) -> Result<Case, StudyError> {
+    if !effects.clearance {
+        params.bearing.clearance = 0.0;
+    }
+    if !effects.waviness {
+        params.bearing.inner_waviness = RaceWaviness::default();
+        params.bearing.outer_waviness = RaceWaviness::default();
+    }
+    if !effects.damping {
+        params.bearing.damping = 0.0;
+    }
+    params.gravity = effects.gravity;
+    params.validate().map_err(|e| {
+        let source = prov.iter().rev().find(|(name, _, _)| {
+            lookup(name).is_some_and(|p| p.field == e.field)
+                || (*name == "location" && e.field == "location")
+        });
+        match source {
+            Some((_, field, place)) => ctx.err(
+                Some(*place),
+                field,
+                format!("{} is not allowed: {} (case {id})", e.value, e.allowed),
+            ),
+            None => ctx.err(
+                None,
+                &e.field,
+                format!(
+                    "{} is not allowed: {} (case {id}, default value)",
+                    e.value, e.allowed
+                ),
+            ),
+        }
+    })?;
+    Ok(Case {
+        id,
+        params,
+        reference: 0,
+    })
+}
+
+fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
+    let Some(list) = &file.effects else {
+        return Ok(Effects {
+            clearance: true,
+            waviness: true,
+            damping: true,
+            gravity: false,
+        });
+    };
+    let mut e = Effects {
+        clearance: false,
+        waviness: false,
+        damping: false,
+        gravity: false,
+    };
+    for (k, name) in list.value.iter().enumerate() {
+        let slot = match name.value.as_str() {
+            "clearance" => &mut e.clearance,
+            "waviness" => &mut e.waviness,
+            "damping" => &mut e.damping,
+            "gravity" => &mut e.gravity,
+            other => {
+                return Err(ctx.err(
+                    Some(at(&name.referenced)),
+                    &format!("effects[{k}]"),
+                    format!(
+                        "unknown effect `{other}`; expected any of: {}",
+                        Effects::NAMES.join(", ")
+                    ),
+                ))
+            }
+        };
+        *slot = true;
+    }
+    Ok(e)
+}
+
+/// MODEL.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` and `location:`.
+fn base_case(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    effects: &Effects,
+    prov: &mut Provenance,
+) -> Result<CaseParams, StudyError> {
+    let mut c = CaseParams::default();
+    if effects.waviness {
+        // MODEL.md Table 2: N_i = N_o = 35, Π_p = 4 µm.
+        c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
+        c.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
+    }
+    let set = |c: &mut CaseParams,
+               name: &str,
+               v: &Option<S<Scalar>>,
+               field: &str,
+               prov: &mut Provenance| match v {
+        Some(v) => ctx.apply(c, name, v, field, effects, prov),
+        None => Ok(()),
+    };
+    if let Some(m) = &file.mechanism {
+        for (name, v) in [
+            ("crank_length", &m.crank_length),
+            ("rod_length", &m.rod_length),
+            ("crank_mass", &m.crank_mass),
+            ("crank_inertia", &m.crank_inertia),
+            ("rod_mass", &m.rod_mass),
+            ("rod_inertia", &m.rod_inertia),
+            ("slider_mass", &m.slider_mass),
+            ("slider_inertia", &m.slider_inertia),
+        ] {
+            set(&mut c, name, v, &format!("mechanism.{name}"), prov)?;
+        }
+    }
+    if let Some(b) = &file.bearing {
+        for (name, v) in [
+            ("ball_count", &b.ball_count),
+            ("clearance", &b.clearance),
+            ("damping", &b.damping),
+            ("inner_race_diameter", &b.inner_race_diameter),
+            ("outer_race_diameter", &b.outer_race_diameter),
+        ] {
+            set(&mut c, name, v, &format!("bearing.{name}"), prov)?;
+        }
+        match &b.stiffness {
+            Some(S {
+                value: Scalar::Text(t),
+                referenced,
+                ..
+            }) if t == "harris" => {
+                c.bearing.stiffness = harris(ctx, b.geometry.as_ref(), at(referenced))?;
+            }
+            other => set(&mut c, "stiffness", other, "bearing.stiffness", prov)?,
+        }
+        if let Some(m) = &b.damping_model {
+            c.bearing.damping_model = match m.value.as_str() {
+                "compression_only" => DampingModel::CompressionOnly,
+                "two_sided" => DampingModel::TwoSided,
+                other => {
+                    return Err(ctx.err(
+                        Some(at(&m.referenced)),
+                        "bearing.damping_model",
+                        format!("`{other}` is not allowed: compression_only or two_sided"),
+                    ))
+                }
+            };
+        }
+        for (race, section) in [
+            ("", &b.waviness),
+            ("inner_", &b.inner_waviness),
+            ("outer_", &b.outer_waviness),
+        ] {
+            if let Some(w) = section {
+                waviness(ctx, &mut c, race, w, effects, prov)?;
+            }
+        }
+    }
+    set(&mut c, "rpm", &file.rpm, "rpm", prov)?;
+    set(&mut c, "location", &file.location, "location", prov)?;
+    Ok(c)
+}
+
+/// A `waviness:` (race = "") or `inner_/outer_waviness:` section.
+fn waviness(
+    ctx: &Ctx<'_>,
+    c: &mut CaseParams,
+    race: &str,
+    w: &WavinessSection,
+    effects: &Effects,
+    prov: &mut Provenance,
+) -> Result<(), StudyError> {
+    let section = if race.is_empty() {
+        "bearing.waviness".to_string()
+    } else {
+        format!("bearing.{race}waviness")
+    };
+    if let Some(list) = &w.harmonics {
+        if let Some((key, v)) = [
+            ("number", &w.number),
+            ("amplitude", &w.amplitude),
+            ("phase", &w.phase),
+        ]
+        .into_iter()
+        .find_map(|(k, v)| v.as_ref().map(|v| (k, v)))
+        {
+            return Err(ctx.err(
+                Some(at(&v.referenced)),
+                &format!("{section}.{key}"),
+                "give either `harmonics:` or a single number/amplitude/phase, not both",
+            ));
+        }
+        if let Some((effect, false)) = effects.governing("waviness") {
+            return Err(ctx.err(
+                Some(at(&list.referenced)),
+                &format!("{section}.harmonics"),
+                format!("the {effect} effect is off; add `{effect}` to `effects` to set it"),
+            ));
+        }
+        let mut harmonics = Vec::new();
+        for (k, h) in list.value.iter().enumerate() {
+            let field = format!("{section}.harmonics[{k}]");
+            let number = ctx.quantity(
+                &h.number,
+                Dimension::Dimensionless,
+                &format!("{field}.number"),
+            )?;
+            if number.fract() != 0.0 || !(1.0..=u32::MAX as f64).contains(&number) {
+                return Err(ctx.err(
+                    Some(at(&h.number.referenced)),
+                    &format!("{field}.number"),
+                    format!("{number} is not allowed: a whole number >= 1"),
+                ));
+            }
+            harmonics.push(Harmonic {
+                number: number as u32,
+                amplitude: ctx.quantity(
+                    &h.amplitude,
+                    Dimension::Length,
+                    &format!("{field}.amplitude"),
+                )?,
+                phase: h
+                    .phase
+                    .as_ref()
+                    .map(|p| ctx.quantity(p, Dimension::Angle, &format!("{field}.phase")))
+                    .transpose()?
+                    .unwrap_or(0.0),
+            });
+        }
+        let races: Vec<&mut RaceWaviness> = match race {
+            "inner_" => vec![&mut c.bearing.inner_waviness],
+            "outer_" => vec![&mut c.bearing.outer_waviness],
+            _ => vec![&mut c.bearing.inner_waviness, &mut c.bearing.outer_waviness],
+        };
+        for r in races {
+            r.harmonics = harmonics.clone();
+        }
+    }
+    for (key, v) in [
+        ("number", &w.number),
+        ("amplitude", &w.amplitude),
+        ("phase", &w.phase),
+    ] {
+        if let Some(v) = v {
+            ctx.apply(
+                c,
+                &format!("{race}waviness_{key}"),
+                v,
+                &format!("{section}.{key}"),
+                effects,
+                prov,
+            )?;
+        }
+    }
+    if let Some(v) = &w.offset {
+        let names: &[&str] = match race {
+            "" => &["inner_waviness_offset", "outer_waviness_offset"],
+            "inner_" => &["inner_waviness_offset"],
+            _ => &["outer_waviness_offset"],
+        };
+        for name in names {
+            ctx.apply(c, name, v, &format!("{section}.offset"), effects, prov)?;
+        }
+    }
+    Ok(())
+}
+
+/// `stiffness: harris`: Harris's method on the (default SKF 98205) contact geometry.
+fn harris(
+    ctx: &Ctx<'_>,
+    g: Option<&super::config::GeometrySection>,
+    place: (u64, u64),
+) -> Result<f64, StudyError> {
+    let mut geometry = ContactGeometry::skf_98205();
+    if let Some(g) = g {
+        for (key, v, dim, slot) in [
+            (
+                "ball_diameter",
+                &g.ball_diameter,
+                Dimension::Length,
+                &mut geometry.ball_diameter,
+            ),
+            (
+                "pitch_diameter",
+                &g.pitch_diameter,
+                Dimension::Length,
+                &mut geometry.pitch_diameter,
+            ),
+            (
+                "inner_conformity",
+                &g.inner_conformity,
+                Dimension::Dimensionless,
+                &mut geometry.inner_conformity,
+            ),
+            (
+                "outer_conformity",
+                &g.outer_conformity,
+                Dimension::Dimensionless,
+                &mut geometry.outer_conformity,
+            ),
+            (
+                "youngs_modulus",
+                &g.youngs_modulus,
+                Dimension::Pressure,
+                &mut geometry.youngs_modulus,
+            ),
+            (
+                "poisson_ratio",
+                &g.poisson_ratio,
+                Dimension::Dimensionless,
+                &mut geometry.poisson_ratio,
+            ),
+        ] {
+            if let Some(v) = v {
+                *slot = ctx.quantity(v, dim, &format!("bearing.geometry.{key}"))?;
+            }
+        }
+    }
+    geometry.harris_stiffness().map(|k| k.total).map_err(|e| {
+        ctx.err(
+            Some(place),
+            &e.field,
+            format!("{} is not allowed: {}", e.value, e.allowed),
+        )
+    })
+}
+
+fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> {
+    let s = match &file.solver {
+        Some(s) => s,
+        None => {
+            return Ok(SolverSettings::new(Method::DormandPrince {
+                rtol: 1e-8,
+                atol: 1e-12,
+            }))
+        }
+    };
+    let positive = |v: &Option<S<Scalar>>,
+                    dim: Dimension,
+                    field: &str,
+                    default: f64|
+     -> Result<f64, StudyError> {
+        match v {
+            None => Ok(default),
+            Some(v) => {
+                let x = ctx.quantity(v, dim, field)?;
+                if x > 0.0 {
+                    Ok(x)
+                } else {
+                    Err(ctx.err(
+                        Some(at(&v.referenced)),
+                        field,
+                        format!("{x} is not allowed: > 0"),
+                    ))
+                }
+            }
+        }
+    };
+    let rtol = positive(&s.rtol, Dimension::Dimensionless, "solver.rtol", 1e-8)?;
+    let atol = positive(&s.atol, Dimension::Dimensionless, "solver.atol", 1e-12)?;
+    let method = match s.method.as_ref().map(|m| m.value.as_str()) {
+        None | Some("dopri5") => Method::DormandPrince { rtol, atol },
+        Some("sdirk4") => Method::Sdirk4 { rtol, atol },
+        Some("rk4") => Method::Rk4 {
+            step: positive(&s.step, Dimension::Time, "solver.step", 20e-6)?,
+        },
+        Some(other) => {
+            let m = s.method.as_ref().map(|m| at(&m.referenced));
+            return Err(ctx.err(
+                m,
+                "solver.method",
+                format!("`{other}` is not allowed: dopri5, rk4 or sdirk4"),
+            ));
+        }
+    };
+    let mut settings = SolverSettings::new(method);
+    if let Some(m) = &s.max_steps {
+        settings.max_steps = m.value;
+    }
+    settings.max_step = positive(
+        &s.max_step,
+        Dimension::Time,
+        "solver.max_step",
+        f64::INFINITY,
+    )?;
+    Ok(settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::params::ParamDef;
+
+    #[test]
+    fn parameter_names_are_unique() {
+        let mut names: Vec<&str> = PARAMETERS.iter().map(|p: &ParamDef| p.name).collect();
+        names.sort_unstable();
+        let len = names.len();
+        names.dedup();
+        assert_eq!(names.len(), len);
+    }
+}

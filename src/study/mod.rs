@@ -1,0 +1,128 @@
+//! Studies: a grid file parsed, validated and expanded into cases before anything runs.
+//!
+//! Two stages (MODEL.md defaults fill everything a file leaves out):
+//! 1. [`config`]: the serde mirror of the YAML (unknown keys refused), every value
+//!    with its line and column;
+//! 2. [`Study::from_yaml`]: units resolved ([`units`]), effects applied, axes
+//!    expanded (cartesian product of `grid:` in file order, first axis slowest, then
+//!    the `zip:` groups, then the explicit `cases:`), every case validated.
+//!
+//! Errors name the file, line, column, field and reason.
+
+pub mod config;
+mod expand;
+pub mod params;
+pub mod units;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::mechanism::CaseParams;
+use crate::simulate::Sampling;
+use crate::solve::SolverSettings;
+
+pub use expand::Effects;
+
+/// Default largest number of cases a grid may expand to (`max_cases:` overrides).
+pub const DEFAULT_MAX_CASES: u64 = 100_000;
+
+/// A grid file problem: where it is and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyError {
+    /// The grid file.
+    pub path: PathBuf,
+    /// 1-based line and column of the offending value, when known.
+    pub location: Option<(u64, u64)>,
+    /// Dotted name of the field (`grid.ball_count[1]`), or empty for syntax errors.
+    pub field: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl fmt::Display for StudyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some((line, col)) = self.location {
+            write!(f, ":{line}:{col}")?;
+        }
+        if self.field.is_empty() {
+            write!(f, ": {}", self.message)
+        } else {
+            write!(f, ": `{}`: {}", self.field, self.message)
+        }
+    }
+}
+
+impl std::error::Error for StudyError {}
+
+/// One case of a study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    /// Position in the expanded study (0-based, deterministic).
+    pub id: u64,
+    /// Everything that defines the simulation.
+    pub params: CaseParams,
+    /// Index in [`Study::references`] of the ideal mechanism it is compared with.
+    pub reference: usize,
+}
+
+/// A validated, expanded study.
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// Study name.
+    pub name: String,
+    /// Free-text description.
+    pub description: String,
+    /// The grid file's text, verbatim.
+    pub source: String,
+    /// Where it was read from.
+    pub path: PathBuf,
+    /// Output sampling.
+    pub sampling: Sampling,
+    /// Integrator settings.
+    pub solver: SolverSettings,
+    /// Which effects are simulated.
+    pub effects: Effects,
+    /// Start of the window analysed by metrics and spectra (s).
+    pub transient: f64,
+    /// Spectrum window name: `hann` or `rectangular`.
+    pub window: String,
+    /// Channels transformed into spectra (names from [`crate::simulate::CHANNELS`]).
+    pub spectrum_channels: Vec<&'static str>,
+    /// Store series and spectra as float32.
+    pub float32: bool,
+    /// Deflate level (0 = none).
+    pub compression: u8,
+    /// Names of the parameters the grid varies, in expansion order.
+    pub axes: Vec<String>,
+    /// The cases, in id order.
+    pub cases: Vec<Case>,
+    /// Distinct ideal mechanisms (one per speed and body set) the cases compare with.
+    pub references: Vec<CaseParams>,
+}
+
+impl Study {
+    /// Reads and validates the grid file at `path`.
+    pub fn load(path: &Path) -> Result<Self, StudyError> {
+        let text = std::fs::read_to_string(path).map_err(|e| StudyError {
+            path: path.to_path_buf(),
+            location: None,
+            field: String::new(),
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::from_yaml(&text, path)
+    }
+
+    /// Parses and validates grid-file `text` (`path` is used in messages only).
+    pub fn from_yaml(text: &str, path: &Path) -> Result<Self, StudyError> {
+        expand::build(text, path)
+    }
+
+    /// The ids of shard `k` of `n` (1-based `k`): cases whose id ≡ k − 1 (mod n),
+    /// so shards are balanced and their union is the whole study.
+    pub fn shard(&self, k: u64, n: u64) -> Vec<usize> {
+        (0..self.cases.len())
+            .filter(|&i| self.cases[i].id % n == k - 1)
+            .collect()
+    }
+}

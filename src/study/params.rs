@@ -1,0 +1,343 @@
+//! The scalar parameters a grid may vary or a file records per case: one table,
+//! one source of truth for names, units, descriptions and where each lives in
+//! [`CaseParams`].
+
+use super::units::Dimension;
+use crate::bearing::{Harmonic, RaceWaviness};
+use crate::mechanism::CaseParams;
+
+/// One scalar case parameter.
+#[derive(Clone, Copy)]
+pub struct ParamDef {
+    /// Name in grid files and study files.
+    pub name: &'static str,
+    /// Name of the field in validation errors of [`CaseParams::validate`].
+    pub field: &'static str,
+    /// Physical dimension (decides accepted units; values are stored in its base unit).
+    pub dimension: Dimension,
+    /// Whether only whole numbers are allowed.
+    pub integer: bool,
+    /// Description for files.
+    pub long_name: &'static str,
+    get: fn(&CaseParams) -> f64,
+    set: fn(&mut CaseParams, f64),
+}
+
+impl ParamDef {
+    /// The value in `case`, in the base unit of [`ParamDef::dimension`].
+    pub fn get(&self, case: &CaseParams) -> f64 {
+        (self.get)(case)
+    }
+
+    /// Sets the value (base unit) in `case`.
+    pub fn set(&self, case: &mut CaseParams, value: f64) {
+        (self.set)(case, value)
+    }
+}
+
+impl std::fmt::Debug for ParamDef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+/// The first harmonic of a race, created (zero amplitude, 35 waves) if absent.
+fn first(w: &mut RaceWaviness) -> &mut Harmonic {
+    if w.harmonics.is_empty() {
+        w.harmonics.push(Harmonic {
+            number: 35,
+            amplitude: 0.0,
+            phase: 0.0,
+        });
+    }
+    &mut w.harmonics[0]
+}
+
+fn first_value(w: &RaceWaviness, f: fn(&Harmonic) -> f64) -> f64 {
+    w.harmonics.first().map(f).unwrap_or(0.0)
+}
+
+/// Both races' value if they agree, else NaN.
+fn both(c: &CaseParams, f: fn(&Harmonic) -> f64) -> f64 {
+    let (i, o) = (
+        first_value(&c.bearing.inner_waviness, f),
+        first_value(&c.bearing.outer_waviness, f),
+    );
+    if i == o {
+        i
+    } else {
+        f64::NAN
+    }
+}
+
+macro_rules! param {
+    ($name:literal, $field:literal, $dim:ident, $int:literal, $long:literal, |$c:ident| $get:expr, |$s:ident, $v:ident| $set:expr) => {
+        ParamDef {
+            name: $name,
+            field: $field,
+            dimension: Dimension::$dim,
+            integer: $int,
+            long_name: $long,
+            get: |$c: &CaseParams| $get,
+            set: |$s: &mut CaseParams, $v: f64| $set,
+        }
+    };
+}
+
+/// Every scalar parameter, in file order. `waviness_*` set both races' first
+/// harmonic; in files they hold the common value (NaN where the races differ).
+pub const PARAMETERS: &[ParamDef] = &[
+    param!(
+        "ball_count",
+        "bearing.ball_count",
+        Dimensionless,
+        true,
+        "number of balls N_b",
+        |c| c.bearing.ball_count as f64,
+        |c, v| c.bearing.ball_count = v as usize
+    ),
+    param!(
+        "rpm",
+        "rpm",
+        Speed,
+        false,
+        "crank speed",
+        |c| c.rpm,
+        |c, v| c.rpm = v
+    ),
+    param!(
+        "clearance",
+        "bearing.clearance",
+        Length,
+        false,
+        "diametral clearance P_d (negative: preload)",
+        |c| c.bearing.clearance,
+        |c, v| c.bearing.clearance = v
+    ),
+    param!(
+        "stiffness",
+        "bearing.stiffness",
+        Stiffness,
+        false,
+        "ball contact stiffness K",
+        |c| c.bearing.stiffness,
+        |c, v| c.bearing.stiffness = v
+    ),
+    param!(
+        "damping",
+        "bearing.damping",
+        Damping,
+        false,
+        "ball contact damping C",
+        |c| c.bearing.damping,
+        |c, v| c.bearing.damping = v
+    ),
+    param!(
+        "waviness_number",
+        "bearing.inner_waviness.harmonics[0].number",
+        Dimensionless,
+        true,
+        "waviness number of both races",
+        |c| both(c, |h| h.number as f64),
+        |c, v| {
+            first(&mut c.bearing.inner_waviness).number = v as u32;
+            first(&mut c.bearing.outer_waviness).number = v as u32;
+        }
+    ),
+    param!(
+        "waviness_amplitude",
+        "bearing.inner_waviness.harmonics[0].amplitude",
+        Length,
+        false,
+        "waviness amplitude of both races",
+        |c| both(c, |h| h.amplitude),
+        |c, v| {
+            first(&mut c.bearing.inner_waviness).amplitude = v;
+            first(&mut c.bearing.outer_waviness).amplitude = v;
+        }
+    ),
+    param!(
+        "waviness_phase",
+        "bearing.inner_waviness.harmonics[0].phase",
+        Angle,
+        false,
+        "waviness phase of both races",
+        |c| both(c, |h| h.phase),
+        |c, v| {
+            first(&mut c.bearing.inner_waviness).phase = v;
+            first(&mut c.bearing.outer_waviness).phase = v;
+        }
+    ),
+    param!(
+        "inner_waviness_number",
+        "bearing.inner_waviness.harmonics[0].number",
+        Dimensionless,
+        true,
+        "inner race waviness number N_i",
+        |c| first_value(&c.bearing.inner_waviness, |h| h.number as f64),
+        |c, v| first(&mut c.bearing.inner_waviness).number = v as u32
+    ),
+    param!(
+        "inner_waviness_amplitude",
+        "bearing.inner_waviness.harmonics[0].amplitude",
+        Length,
+        false,
+        "inner race waviness amplitude",
+        |c| first_value(&c.bearing.inner_waviness, |h| h.amplitude),
+        |c, v| first(&mut c.bearing.inner_waviness).amplitude = v
+    ),
+    param!(
+        "inner_waviness_phase",
+        "bearing.inner_waviness.harmonics[0].phase",
+        Angle,
+        false,
+        "inner race waviness phase",
+        |c| first_value(&c.bearing.inner_waviness, |h| h.phase),
+        |c, v| first(&mut c.bearing.inner_waviness).phase = v
+    ),
+    param!(
+        "inner_waviness_offset",
+        "bearing.inner_waviness.offset",
+        Length,
+        false,
+        "inner race waviness offset Pi_T",
+        |c| c.bearing.inner_waviness.offset,
+        |c, v| c.bearing.inner_waviness.offset = v
+    ),
+    param!(
+        "outer_waviness_number",
+        "bearing.outer_waviness.harmonics[0].number",
+        Dimensionless,
+        true,
+        "outer race waviness number N_o",
+        |c| first_value(&c.bearing.outer_waviness, |h| h.number as f64),
+        |c, v| first(&mut c.bearing.outer_waviness).number = v as u32
+    ),
+    param!(
+        "outer_waviness_amplitude",
+        "bearing.outer_waviness.harmonics[0].amplitude",
+        Length,
+        false,
+        "outer race waviness amplitude",
+        |c| first_value(&c.bearing.outer_waviness, |h| h.amplitude),
+        |c, v| first(&mut c.bearing.outer_waviness).amplitude = v
+    ),
+    param!(
+        "outer_waviness_phase",
+        "bearing.outer_waviness.harmonics[0].phase",
+        Angle,
+        false,
+        "outer race waviness phase",
+        |c| first_value(&c.bearing.outer_waviness, |h| h.phase),
+        |c, v| first(&mut c.bearing.outer_waviness).phase = v
+    ),
+    param!(
+        "outer_waviness_offset",
+        "bearing.outer_waviness.offset",
+        Length,
+        false,
+        "outer race waviness offset Pi_T",
+        |c| c.bearing.outer_waviness.offset,
+        |c, v| c.bearing.outer_waviness.offset = v
+    ),
+    param!(
+        "inner_race_diameter",
+        "bearing.inner_race_diameter",
+        Length,
+        false,
+        "inner raceway diameter d_i",
+        |c| c.bearing.inner_race_diameter,
+        |c, v| c.bearing.inner_race_diameter = v
+    ),
+    param!(
+        "outer_race_diameter",
+        "bearing.outer_race_diameter",
+        Length,
+        false,
+        "outer raceway diameter d_o",
+        |c| c.bearing.outer_race_diameter,
+        |c, v| c.bearing.outer_race_diameter = v
+    ),
+    param!(
+        "crank_length",
+        "mechanism.crank_length",
+        Length,
+        false,
+        "crank length L2",
+        |c| c.mechanism.crank_length,
+        |c, v| c.mechanism.crank_length = v
+    ),
+    param!(
+        "rod_length",
+        "mechanism.rod_length",
+        Length,
+        false,
+        "connecting rod length L3",
+        |c| c.mechanism.rod_length,
+        |c, v| c.mechanism.rod_length = v
+    ),
+    param!(
+        "crank_mass",
+        "mechanism.crank_mass",
+        Mass,
+        false,
+        "crank mass m2",
+        |c| c.mechanism.crank_mass,
+        |c, v| c.mechanism.crank_mass = v
+    ),
+    param!(
+        "crank_inertia",
+        "mechanism.crank_inertia",
+        Inertia,
+        false,
+        "crank moment of inertia J2",
+        |c| c.mechanism.crank_inertia,
+        |c, v| c.mechanism.crank_inertia = v
+    ),
+    param!(
+        "rod_mass",
+        "mechanism.rod_mass",
+        Mass,
+        false,
+        "connecting rod mass m3",
+        |c| c.mechanism.rod_mass,
+        |c, v| c.mechanism.rod_mass = v
+    ),
+    param!(
+        "rod_inertia",
+        "mechanism.rod_inertia",
+        Inertia,
+        false,
+        "connecting rod moment of inertia J3",
+        |c| c.mechanism.rod_inertia,
+        |c, v| c.mechanism.rod_inertia = v
+    ),
+    param!(
+        "slider_mass",
+        "mechanism.slider_mass",
+        Mass,
+        false,
+        "slider mass m4",
+        |c| c.mechanism.slider_mass,
+        |c, v| c.mechanism.slider_mass = v
+    ),
+    param!(
+        "slider_inertia",
+        "mechanism.slider_inertia",
+        Inertia,
+        false,
+        "slider moment of inertia J4",
+        |c| c.mechanism.slider_inertia,
+        |c, v| c.mechanism.slider_inertia = v
+    ),
+];
+
+/// The parameter called `name`.
+pub fn lookup(name: &str) -> Option<&'static ParamDef> {
+    PARAMETERS.iter().find(|p| p.name == name)
+}
+
+/// The parameter whose validation field is `field` (for mapping errors back to YAML).
+pub fn by_field(field: &str) -> impl Iterator<Item = &'static ParamDef> + '_ {
+    PARAMETERS.iter().filter(move |p| p.field == field)
+}
