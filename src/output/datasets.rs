@@ -1,0 +1,55 @@
+//! The open per-row datasets of a study file, shared by the writer and the reader.
+
+use std::path::Path;
+
+use hdf5::{Dataset, File};
+
+use super::error::{AtVariable, StudyFileError};
+use super::layout::{Layout, VarSpec, ERROR_MESSAGE, STATUS};
+
+/// Handles to every dataset written or read one row at a time, in [`Layout`] order.
+pub(super) struct RowDatasets {
+    pub(super) series: Vec<Dataset>,
+    pub(super) spectra: Vec<Dataset>,
+    pub(super) metrics: Vec<Dataset>,
+    pub(super) status: Dataset,
+    pub(super) error_message: Dataset,
+    pub(super) reference_series: Vec<Dataset>,
+}
+
+impl RowDatasets {
+    /// Opens the datasets `layout` names in `file` (at `path`, for messages).
+    pub(super) fn open(file: &File, layout: &Layout, path: &Path) -> Result<Self, StudyFileError> {
+        let one = |name: &str| file.dataset(name).at(path, name);
+        let all = |specs: &[VarSpec]| -> Result<Vec<Dataset>, StudyFileError> {
+            specs.iter().map(|s| one(&s.name)).collect()
+        };
+        Ok(Self {
+            series: all(&layout.series)?,
+            spectra: all(&layout.spectra)?,
+            metrics: all(&layout.metrics)?,
+            status: one(STATUS)?,
+            error_message: one(ERROR_MESSAGE)?,
+            reference_series: all(&layout.reference_series)?,
+        })
+    }
+}
+
+/// Checks that `row` is below `len`, the length of `dimension`.
+pub(super) fn check_row(
+    path: &Path,
+    dimension: &'static str,
+    row: usize,
+    len: usize,
+) -> Result<(), StudyFileError> {
+    if row < len {
+        Ok(())
+    } else {
+        Err(StudyFileError::Row {
+            path: path.to_owned(),
+            dimension,
+            row,
+            len,
+        })
+    }
+}

@@ -1,0 +1,518 @@
+//! What a study file holds: the [`Layout`] handed to
+//! [`StudyWriter::create`](super::StudyWriter::create) and reconstructed by
+//! [`StudyReader::layout`](super::StudyReader::layout), and its checks.
+
+use std::collections::HashSet;
+use std::time::SystemTime;
+
+/// Name of the case dimension and its coordinate variable (u64 case ids).
+pub const CASE: &str = "case";
+/// Name of the time dimension and its coordinate variable (f64, s).
+pub const TIME: &str = "time";
+/// Name of the frequency dimension and its coordinate variable (f64, Hz).
+pub const FREQUENCY: &str = "frequency";
+/// Name of the reference dimension and its coordinate variable (u64 reference ids).
+pub const REFERENCE: &str = "reference";
+/// Built-in variable `[case]` i8: the [`Status`] code of each case.
+pub const STATUS: &str = "status";
+/// Built-in variable `[case]` string: why a case failed (empty otherwise).
+pub const ERROR_MESSAGE: &str = "error_message";
+/// Built-in variable `[case]` u64: the `reference` row each case is compared with.
+pub const REFERENCE_INDEX: &str = "reference_index";
+
+/// Variable attribute naming a caller variable's role (see [`Role`]).
+pub(super) const ROLE_ATTR: &str = "studyrun_role";
+/// Root attribute marking a study file; its value is [`FORMAT_VERSION`].
+pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
+/// The file format version this module writes and reads.
+pub(super) const FORMAT_VERSION: i64 = 1;
+
+/// The names no caller variable may take.
+const RESERVED: [&str; 7] = [
+    CASE,
+    TIME,
+    FREQUENCY,
+    REFERENCE,
+    STATUS,
+    ERROR_MESSAGE,
+    REFERENCE_INDEX,
+];
+
+/// Largest chunk HDF5 accepts (bytes): a chunk is one case's series or spectrum.
+const MAX_CHUNK_BYTES: usize = u32::MAX as usize;
+
+/// Name and CF-style metadata of one variable.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VarSpec {
+    /// Variable name in the file: non-empty, no `/`, no NUL, not starting with `_`
+    /// (netCDF reserves those), not one of the dimension or built-in names.
+    pub name: String,
+    /// CF/UDUNITS units string, e.g. `m s-2`; `1` for dimensionless.
+    pub units: String,
+    /// Human-readable description (CF `long_name`).
+    pub long_name: String,
+}
+
+impl VarSpec {
+    /// A spec from its three strings.
+    pub fn new(
+        name: impl Into<String>,
+        units: impl Into<String>,
+        long_name: impl Into<String>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            units: units.into(),
+            long_name: long_name.into(),
+        }
+    }
+}
+
+/// The values of a parameter, one per case (or per reference).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamValues {
+    /// Numbers, stored as f64 (in the parameter's units).
+    F64(Vec<f64>),
+    /// Labels, stored as variable-length UTF-8 strings (no NUL bytes).
+    Str(Vec<String>),
+}
+
+impl ParamValues {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::F64(v) => v.len(),
+            Self::Str(v) => v.len(),
+        }
+    }
+
+    /// True if there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A parameter variable: its metadata and its values, written when the file is created.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// Name, units, long name.
+    pub spec: VarSpec,
+    /// One value per row of the parameter's dimension.
+    pub values: ParamValues,
+}
+
+/// How the `[case, *]` and `[reference, time]` arrays are stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Storage {
+    /// Store series and spectra as float32 (values rounded to nearest) instead of
+    /// float64. Metrics, parameters and coordinates are always float64.
+    pub float32: bool,
+    /// Deflate (gzip) level 0–9 for series and spectra, preceded by the shuffle filter;
+    /// 0 stores them without any filter.
+    pub deflate_level: u8,
+}
+
+impl Default for Storage {
+    /// float64, deflate level 1 (most of deflate's gain on floating-point data at a
+    /// fraction of the higher levels' cost).
+    fn default() -> Self {
+        Self {
+            float32: false,
+            deflate_level: 1,
+        }
+    }
+}
+
+/// A root attribute value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AttrValue {
+    /// A variable-length UTF-8 string (no NUL bytes).
+    Str(String),
+    /// A float64 scalar.
+    F64(f64),
+    /// An int64 scalar.
+    I64(i64),
+}
+
+impl From<&str> for AttrValue {
+    fn from(s: &str) -> Self {
+        Self::Str(s.to_owned())
+    }
+}
+
+impl From<String> for AttrValue {
+    fn from(s: String) -> Self {
+        Self::Str(s)
+    }
+}
+
+impl From<f64> for AttrValue {
+    fn from(x: f64) -> Self {
+        Self::F64(x)
+    }
+}
+
+impl From<i64> for AttrValue {
+    fn from(x: i64) -> Self {
+        Self::I64(x)
+    }
+}
+
+/// State of one case, stored in the `status` variable as i8 with CF `flag_values`
+/// `[0, 1, 2]` and `flag_meanings` `"pending ok failed"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(i8)]
+pub enum Status {
+    /// Not written yet (the fill value).
+    #[default]
+    Pending = 0,
+    /// Ran to the end; its series, spectra and metrics are in the file.
+    Ok = 1,
+    /// Failed; `error_message` says why.
+    Failed = 2,
+}
+
+impl Status {
+    /// The three states in code order.
+    pub const ALL: [Self; 3] = [Self::Pending, Self::Ok, Self::Failed];
+    /// The CF `flag_meanings` attribute: the states' names in code order.
+    pub const FLAG_MEANINGS: &'static str = "pending ok failed";
+
+    /// The stored code.
+    pub fn code(self) -> i8 {
+        self as i8
+    }
+
+    /// The status with stored code `code`, if any.
+    pub fn from_code(code: i8) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.code() == code)
+    }
+}
+
+/// The role of a caller variable, kept in its `studyrun_role` attribute so that the
+/// reader can rebuild the [`Layout`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Role {
+    Parameter,
+    Metric,
+    Series,
+    Spectrum,
+    ReferenceParameter,
+    ReferenceSeries,
+}
+
+impl Role {
+    const ALL: [Self; 6] = [
+        Self::Parameter,
+        Self::Metric,
+        Self::Series,
+        Self::Spectrum,
+        Self::ReferenceParameter,
+        Self::ReferenceSeries,
+    ];
+
+    /// The attribute value.
+    pub(super) fn as_str(self) -> &'static str {
+        match self {
+            Self::Parameter => "parameter",
+            Self::Metric => "metric",
+            Self::Series => "series",
+            Self::Spectrum => "spectrum",
+            Self::ReferenceParameter => "reference_parameter",
+            Self::ReferenceSeries => "reference_series",
+        }
+    }
+
+    /// The role named by an attribute value.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| r.as_str() == s)
+    }
+}
+
+/// Everything fixed when a study file is created: coordinates, the variables and their
+/// metadata, parameter values, root attributes and storage options.
+///
+/// Rows of every `[case, ...]` variable follow `case_ids`; rows of every
+/// `[reference, ...]` variable follow `reference_ids`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    /// Global case ids (any distinct values, not necessarily `0..n`); at least one.
+    pub case_ids: Vec<u64>,
+    /// Sample times of every series (s); non-empty if there are series.
+    pub times: Vec<f64>,
+    /// Bin frequencies of every spectrum (Hz); non-empty if there are spectra.
+    pub frequencies: Vec<f64>,
+    /// Ids of the reference (ideal mechanism) runs, distinct; at least one.
+    pub reference_ids: Vec<u64>,
+    /// Per-case time series `[case, time]`.
+    pub series: Vec<VarSpec>,
+    /// Per-case spectra `[case, frequency]`.
+    pub spectra: Vec<VarSpec>,
+    /// Per-case scalar results `[case]`, float64.
+    pub metrics: Vec<VarSpec>,
+    /// Per-case inputs `[case]`, written at creation.
+    pub parameters: Vec<Param>,
+    /// Per-reference inputs `[reference]`, written at creation.
+    pub reference_parameters: Vec<Param>,
+    /// Per-reference time series `[reference, time]`.
+    pub reference_series: Vec<VarSpec>,
+    /// For each case, the row in `reference_ids` it is compared with.
+    pub reference_index: Vec<u64>,
+    /// Root attributes in file order (names non-empty, distinct, not starting with `_`,
+    /// not `studyrun_file_format`). See [`provenance`] for the usual ones.
+    pub attributes: Vec<(String, AttrValue)>,
+    /// Element type and compression of series and spectra.
+    pub storage: Storage,
+}
+
+/// The provenance root attributes: `Conventions` (`CF-1.8`), `studyrun_version`
+/// (the crate version), `git_commit` (short hash at build time, `unknown` outside a
+/// checkout) and `created` (now, RFC 3339, UTC, whole seconds).
+pub fn provenance() -> Vec<(String, AttrValue)> {
+    let created = humantime::format_rfc3339_seconds(SystemTime::now()).to_string();
+    vec![
+        ("Conventions".to_owned(), "CF-1.8".into()),
+        (
+            "studyrun_version".to_owned(),
+            env!("CARGO_PKG_VERSION").into(),
+        ),
+        ("git_commit".to_owned(), env!("STUDYRUN_GIT_COMMIT").into()),
+        ("created".to_owned(), created.into()),
+    ]
+}
+
+impl Layout {
+    /// Number of cases (rows of the `case` dimension).
+    pub fn n_cases(&self) -> usize {
+        self.case_ids.len()
+    }
+
+    /// Number of references (rows of the `reference` dimension).
+    pub fn n_references(&self) -> usize {
+        self.reference_ids.len()
+    }
+
+    /// Checks the layout; the error says what is wrong and names the variable.
+    pub fn validate(&self) -> Result<(), String> {
+        let n_case = self.case_ids.len();
+        let n_ref = self.reference_ids.len();
+        if n_case == 0 {
+            return Err(format!("`{CASE}` needs at least one case id"));
+        }
+        if n_ref == 0 {
+            return Err(format!("`{REFERENCE}` needs at least one reference id"));
+        }
+        distinct(CASE, &self.case_ids)?;
+        distinct(REFERENCE, &self.reference_ids)?;
+        if self.storage.deflate_level > 9 {
+            return Err(format!(
+                "deflate level {} is not in 0..=9",
+                self.storage.deflate_level
+            ));
+        }
+        let element = if self.storage.float32 { 4 } else { 8 };
+        let needs = [
+            (
+                TIME,
+                self.times.len(),
+                !self.series.is_empty() || !self.reference_series.is_empty(),
+            ),
+            (FREQUENCY, self.frequencies.len(), !self.spectra.is_empty()),
+        ];
+        for (dim, len, needed) in needs {
+            if needed && len == 0 {
+                return Err(format!("`{dim}` is empty but variables use it"));
+            }
+            if len.saturating_mul(element) > MAX_CHUNK_BYTES {
+                return Err(format!(
+                    "`{dim}` has {len} values: one case's chunk would exceed HDF5's 4 GiB limit"
+                ));
+            }
+        }
+        if self.reference_index.len() != n_case {
+            return Err(format!(
+                "`{REFERENCE_INDEX}` has {} values for {n_case} cases",
+                self.reference_index.len()
+            ));
+        }
+        if let Some(bad) = self.reference_index.iter().find(|&&i| i >= n_ref as u64) {
+            return Err(format!(
+                "`{REFERENCE_INDEX}` holds row {bad}, but there are {n_ref} references"
+            ));
+        }
+        for (params, dim, len) in [
+            (&self.parameters, CASE, n_case),
+            (&self.reference_parameters, REFERENCE, n_ref),
+        ] {
+            for p in params {
+                if p.values.len() != len {
+                    return Err(format!(
+                        "parameter `{}` has {} values for {len} rows of `{dim}`",
+                        p.spec.name,
+                        p.values.len()
+                    ));
+                }
+                if let ParamValues::Str(v) = &p.values {
+                    if let Some(s) = v.iter().find(|s| s.contains('\0')) {
+                        return Err(format!(
+                            "parameter `{}`: value {s:?} contains NUL",
+                            p.spec.name
+                        ));
+                    }
+                }
+            }
+        }
+        self.check_names()?;
+        self.check_attributes()
+    }
+
+    /// All caller variable specs, in file order.
+    pub(super) fn specs(&self) -> impl Iterator<Item = &VarSpec> {
+        self.parameters
+            .iter()
+            .map(|p| &p.spec)
+            .chain(&self.metrics)
+            .chain(&self.series)
+            .chain(&self.spectra)
+            .chain(self.reference_parameters.iter().map(|p| &p.spec))
+            .chain(&self.reference_series)
+    }
+
+    fn check_names(&self) -> Result<(), String> {
+        let mut seen: HashSet<&str> = RESERVED.into_iter().collect();
+        for spec in self.specs() {
+            let name = spec.name.as_str();
+            if name.is_empty() || name.contains(['/', '\0']) || name.starts_with('_') || name == "."
+            {
+                return Err(format!(
+                    "variable name {name:?} must be non-empty, without `/` or NUL, not starting with `_`"
+                ));
+            }
+            if !seen.insert(name) {
+                return Err(format!(
+                    "variable name `{name}` is used twice or is a built-in name"
+                ));
+            }
+            for (what, text) in [("units", &spec.units), ("long_name", &spec.long_name)] {
+                if text.contains('\0') {
+                    return Err(format!("variable `{name}`: {what} contains NUL"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn check_attributes(&self) -> Result<(), String> {
+        let mut seen = HashSet::new();
+        for (name, value) in &self.attributes {
+            if name.is_empty()
+                || name.contains('\0')
+                || name.starts_with('_')
+                || name == FORMAT_ATTR
+            {
+                return Err(format!(
+                    "root attribute name {name:?} must be non-empty, without NUL, not starting with `_`, not `{FORMAT_ATTR}`"
+                ));
+            }
+            if !seen.insert(name.as_str()) {
+                return Err(format!("root attribute `{name}` is given twice"));
+            }
+            if let AttrValue::Str(s) = value {
+                if s.contains('\0') {
+                    return Err(format!("root attribute `{name}` contains NUL"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks that a coordinate's ids are distinct.
+fn distinct(dim: &str, ids: &[u64]) -> Result<(), String> {
+    let mut seen = HashSet::with_capacity(ids.len());
+    match ids.iter().find(|id| !seen.insert(**id)) {
+        Some(id) => Err(format!("`{dim}` id {id} appears twice")),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> Layout {
+        Layout {
+            case_ids: vec![4, 2],
+            times: vec![0.0, 0.1],
+            frequencies: vec![0.0, 5.0],
+            reference_ids: vec![0],
+            series: vec![VarSpec::new("x", "m", "position")],
+            spectra: vec![VarSpec::new("x_spectrum", "m", "amplitude of x")],
+            metrics: vec![VarSpec::new("x_rms", "m", "rms of x")],
+            parameters: vec![Param {
+                spec: VarSpec::new("rpm", "min-1", "crank speed"),
+                values: ParamValues::F64(vec![300.0, 600.0]),
+            }],
+            reference_parameters: vec![],
+            reference_series: vec![],
+            reference_index: vec![0, 0],
+            attributes: provenance(),
+            storage: Storage::default(),
+        }
+    }
+
+    #[test]
+    fn valid_layout_passes() {
+        assert_eq!(small().validate(), Ok(()));
+    }
+
+    #[test]
+    fn inconsistent_layouts_are_refused_by_name() {
+        type Edit = fn(&mut Layout);
+        let cases: [(Edit, &str); 8] = [
+            (|l| l.case_ids = vec![1, 1], "`case` id 1"),
+            (
+                |l| l.reference_index = vec![0, 1],
+                "`reference_index` holds row 1",
+            ),
+            (
+                |l| l.parameters[0].values = ParamValues::F64(vec![1.0]),
+                "`rpm` has 1 values",
+            ),
+            (|l| l.metrics[0].name = "status".into(), "`status`"),
+            (|l| l.series[0].name = "a/b".into(), "\"a/b\""),
+            (|l| l.storage.deflate_level = 10, "deflate level 10"),
+            (|l| l.times.clear(), "`time` is empty"),
+            (
+                |l| l.attributes.push(("created".into(), 1.0.into())),
+                "`created` is given twice",
+            ),
+        ];
+        for (edit, needle) in cases {
+            let mut layout = small();
+            edit(&mut layout);
+            let err = layout.validate().unwrap_err();
+            assert!(err.contains(needle), "{err:?} lacks {needle:?}");
+        }
+    }
+
+    #[test]
+    fn status_codes_round_trip() {
+        for s in Status::ALL {
+            assert_eq!(Status::from_code(s.code()), Some(s));
+        }
+        assert_eq!(Status::from_code(3), None);
+        assert_eq!(Status::default(), Status::Pending);
+    }
+
+    #[test]
+    fn provenance_has_rfc3339_time_and_commit() {
+        let attrs = provenance();
+        let get = |k: &str| attrs.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        let Some(AttrValue::Str(created)) = get("created") else {
+            panic!("no created attribute")
+        };
+        assert!(humantime::parse_rfc3339(&created).is_ok(), "{created}");
+        assert!(matches!(get("git_commit"), Some(AttrValue::Str(c)) if !c.is_empty()));
+    }
+}

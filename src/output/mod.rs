@@ -1,0 +1,58 @@
+//! Study files: every case's time series, spectra, metrics and status in one HDF5 file
+//! laid out netCDF-4 style (flat root group, named dimensions as HDF5 dimension scales,
+//! CF attributes), so that `xarray.open_dataset(path, engine="h5netcdf")` gives named
+//! dimensions, coordinates and units without `phony_dims`.
+//!
+//! | variable | dims | dtype | units | written |
+//! |---|---|---|---|---|
+//! | `case` | `[case]` | u64 | `1` | at create: global case ids (any distinct values) |
+//! | `time` | `[time]` | f64 | `s` | at create: sample times |
+//! | `frequency` | `[frequency]` | f64 | `Hz` | at create: spectrum bin frequencies |
+//! | `reference` | `[reference]` | u64 | `1` | at create: reference (ideal mechanism) run ids |
+//! | *parameter* | `[case]` | f64 or string | caller's | at create |
+//! | `reference_index` | `[case]` | u64 | `1` | at create: `reference` row each case is compared with |
+//! | `status` | `[case]` | i8 | `1` | per case: `flag_values` `[0, 1, 2]`, `flag_meanings` `pending ok failed`; fill 0 |
+//! | `error_message` | `[case]` | string | `1` | per case: why it failed, empty otherwise |
+//! | *metric* | `[case]` | f64 | caller's | per case; fill NaN |
+//! | *series* | `[case, time]` | f64 or f32 | caller's | per case; fill NaN |
+//! | *spectrum* | `[case, frequency]` | f64 or f32 | caller's | per case; fill NaN |
+//! | *reference parameter* | `[reference]` | f64 or string | caller's | at create |
+//! | *reference series* | `[reference, time]` | f64 or f32 | caller's | per reference; fill NaN |
+//!
+//! Variables appear in the file (and in xarray) in this order. Every variable has the
+//! string attributes `units` and `long_name`; caller variables also `studyrun_role`
+//! (`parameter`, `metric`, `series`, `spectrum`, `reference_parameter`,
+//! `reference_series`), from which [`StudyReader::layout`] rebuilds the [`Layout`].
+//! Float variables filled with NaN carry `_FillValue = NaN` of their own type. Strings
+//! are variable-length UTF-8. The coordinate variables are the dimension scales and
+//! carry netCDF-C's `_Netcdf4Dimid`.
+//!
+//! Root attributes: `studyrun_file_format` = 1 (i64, marks a study file) and the
+//! caller's [`Layout::attributes`] in order (strings, f64 or i64); [`provenance`] gives
+//! `Conventions`, `studyrun_version`, `git_commit` and `created` (RFC 3339).
+//!
+//! Storage: `[case, *]` and `[reference, time]` arrays are chunked one row per chunk
+//! (chunk shape `(1, len)`), so writing or reading a case touches one chunk per
+//! variable; with a deflate level above 0 they pass through shuffle then deflate,
+//! with level 0 through no filter. 1-D variables are contiguous and uncompressed.
+//! Link and attribute creation order are tracked, as netCDF-4 does.
+//!
+//! [`spectrum`] computes the one-sided amplitude spectra stored in the file.
+
+mod attributes;
+mod datasets;
+mod dimension_scales;
+mod error;
+mod layout;
+mod reader;
+pub mod spectrum;
+mod writer;
+
+pub use dimension_scales::ScaleError;
+pub use error::StudyFileError;
+pub use layout::{
+    provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
+    ERROR_MESSAGE, FREQUENCY, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
+};
+pub use reader::{CaseData, StudyReader};
+pub use writer::{CaseRecord, StudyWriter};

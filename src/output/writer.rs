@@ -1,0 +1,486 @@
+//! Creating a study file and writing cases into it, in any order.
+
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+
+use hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
+use hdf5::types::VarLenUnicode;
+use hdf5::{Dataset, File, H5Type};
+
+use super::attributes;
+use super::datasets::{check_row, RowDatasets};
+use super::dimension_scales::{attach_scale, set_scale};
+use super::error::{AtVariable, StudyFileError};
+use super::layout::{
+    Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
+    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
+};
+use super::reader::read_layout;
+
+/// One finished (or failed) case, borrowed from the caller.
+///
+/// An empty `series`, `spectra` or `metrics` list leaves those variables as they are
+/// (NaN in a new file), e.g. for a failed case; a non-empty one must hold every
+/// variable of the layout, in layout order, each of the dimension's length.
+#[derive(Debug, Clone, Copy)]
+pub struct CaseRecord<'a> {
+    /// One slice per [`Layout::series`], `times.len()` values each (their units).
+    pub series: &'a [&'a [f64]],
+    /// One slice per [`Layout::spectra`], `frequencies.len()` values each.
+    pub spectra: &'a [&'a [f64]],
+    /// One value per [`Layout::metrics`].
+    pub metrics: &'a [f64],
+    /// The case's state.
+    pub status: Status,
+    /// Why it failed; empty for a successful case. NUL bytes are stored as U+FFFD.
+    pub message: &'a str,
+}
+
+/// Writes a study file: [`StudyWriter::create`] lays out every variable and writes
+/// coordinates, parameters and attributes; [`StudyWriter::write_case`] and
+/// [`StudyWriter::write_reference`] fill rows in any order. Rows never written keep
+/// NaN (series, spectra, metrics), status 0 (pending) and an empty message.
+///
+/// Scratch for float32 conversion is allocated once, at creation or opening.
+pub struct StudyWriter {
+    path: PathBuf,
+    file: File,
+    layout: Layout,
+    rows: RowDatasets,
+    /// float32 staging buffer, `max(times, frequencies)` long when storing float32.
+    scratch: Vec<f32>,
+}
+
+impl std::fmt::Debug for StudyWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StudyWriter")
+            .field("path", &self.path)
+            .finish_non_exhaustive()
+    }
+}
+
+impl StudyWriter {
+    /// Creates (or replaces) the study file at `path` with `layout`: every variable,
+    /// dimension scale and attribute, and the values known now (coordinates,
+    /// parameters, `reference_index`).
+    pub fn create(path: impl AsRef<Path>, layout: &Layout) -> Result<Self, StudyFileError> {
+        let path = path.as_ref().to_owned();
+        layout.validate().map_err(|reason| StudyFileError::Layout {
+            path: path.clone(),
+            reason,
+        })?;
+        let file = File::with_options()
+            .with_fcpl(|p| {
+                p.link_creation_order(LinkCreationOrder::Indexed)
+                    .attr_creation_order(AttrCreationOrder::Indexed)
+            })
+            .create(&path)
+            .at(&path, "/")?;
+        Creator {
+            path: &path,
+            file: &file,
+            layout,
+        }
+        .build()?;
+        file.flush().at(&path, "/")?;
+        let rows = RowDatasets::open(&file, layout, &path)?;
+        Ok(Self::from_parts(path, file, layout.clone(), rows))
+    }
+
+    /// Opens an existing study file to write more rows into it (to resume a study).
+    /// Its layout is read back from the file; see [`StudyWriter::layout`].
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
+        let path = path.as_ref().to_owned();
+        let file = File::open_rw(&path).at(&path, "/")?;
+        let layout = read_layout(&file, &path)?;
+        let rows = RowDatasets::open(&file, &layout, &path)?;
+        Ok(Self::from_parts(path, file, layout, rows))
+    }
+
+    fn from_parts(path: PathBuf, file: File, layout: Layout, rows: RowDatasets) -> Self {
+        let scratch_len = if layout.storage.float32 {
+            layout.times.len().max(layout.frequencies.len())
+        } else {
+            0
+        };
+        Self {
+            path,
+            file,
+            layout,
+            rows,
+            scratch: vec![0.0; scratch_len],
+        }
+    }
+
+    /// The file's layout.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes `record` into row `row` of every `[case, ...]` variable (`row` indexes
+    /// [`Layout::case_ids`]). Everything is checked before anything is written; the
+    /// status is written last, so a case interrupted mid-write stays pending.
+    pub fn write_case(
+        &mut self,
+        row: usize,
+        record: &CaseRecord<'_>,
+    ) -> Result<(), StudyFileError> {
+        check_row(&self.path, CASE, row, self.layout.n_cases())?;
+        let n_time = self.layout.times.len();
+        let n_freq = self.layout.frequencies.len();
+        self.check_rows("series", &self.layout.series, record.series, n_time)?;
+        self.check_rows("spectra", &self.layout.spectra, record.spectra, n_freq)?;
+        if !record.metrics.is_empty() && record.metrics.len() != self.layout.metrics.len() {
+            return Err(self.record_error(
+                "metrics",
+                format!(
+                    "{} values for {} metrics",
+                    record.metrics.len(),
+                    self.layout.metrics.len()
+                ),
+            ));
+        }
+        let float32 = self.layout.storage.float32;
+        for (i, values) in record.series.iter().enumerate() {
+            let (ds, name) = (&self.rows.series[i], &self.layout.series[i].name);
+            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
+        }
+        for (i, values) in record.spectra.iter().enumerate() {
+            let (ds, name) = (&self.rows.spectra[i], &self.layout.spectra[i].name);
+            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
+        }
+        for (i, value) in record.metrics.iter().enumerate() {
+            let (ds, name) = (&self.rows.metrics[i], &self.layout.metrics[i].name);
+            write_one(ds, row, *value).at(&self.path, name)?;
+        }
+        let message = if record.message.contains('\0') {
+            Cow::Owned(record.message.replace('\0', "\u{FFFD}"))
+        } else {
+            Cow::Borrowed(record.message)
+        };
+        let message = attributes::vlen(&message).at(&self.path, ERROR_MESSAGE)?;
+        write_one(&self.rows.error_message, row, message).at(&self.path, ERROR_MESSAGE)?;
+        write_one(&self.rows.status, row, record.status.code()).at(&self.path, STATUS)
+    }
+
+    /// Writes row `row` of every `[reference, time]` variable: one slice per
+    /// [`Layout::reference_series`], `times.len()` values each.
+    pub fn write_reference(&mut self, row: usize, series: &[&[f64]]) -> Result<(), StudyFileError> {
+        check_row(&self.path, REFERENCE, row, self.layout.n_references())?;
+        let n_time = self.layout.times.len();
+        if series.len() != self.layout.reference_series.len() {
+            return Err(self.record_error(
+                "reference_series",
+                format!(
+                    "{} series for {} reference series variables",
+                    series.len(),
+                    self.layout.reference_series.len()
+                ),
+            ));
+        }
+        self.check_rows(
+            "reference_series",
+            &self.layout.reference_series,
+            series,
+            n_time,
+        )?;
+        let float32 = self.layout.storage.float32;
+        for (i, values) in series.iter().enumerate() {
+            let (ds, name) = (
+                &self.rows.reference_series[i],
+                &self.layout.reference_series[i].name,
+            );
+            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
+        }
+        Ok(())
+    }
+
+    /// Flushes everything written so far to disk.
+    pub fn flush(&self) -> Result<(), StudyFileError> {
+        self.file.flush().at(&self.path, "/")
+    }
+
+    /// Flushes and closes the file, reporting errors that dropping would hide.
+    pub fn finish(self) -> Result<(), StudyFileError> {
+        self.flush()?;
+        let Self {
+            path, file, rows, ..
+        } = self;
+        drop(rows);
+        file.close().at(&path, "/")
+    }
+
+    /// Checks a record's list of rows against the layout's variables: empty, or one
+    /// slice of length `len` per variable.
+    fn check_rows(
+        &self,
+        group: &str,
+        specs: &[VarSpec],
+        values: &[&[f64]],
+        len: usize,
+    ) -> Result<(), StudyFileError> {
+        if values.is_empty() {
+            return Ok(());
+        }
+        if values.len() != specs.len() {
+            return Err(self.record_error(
+                group,
+                format!("{} slices for {} variables", values.len(), specs.len()),
+            ));
+        }
+        for (spec, v) in specs.iter().zip(values) {
+            if v.len() != len {
+                return Err(self.record_error(
+                    &spec.name,
+                    format!("{} values, the dimension has {len}", v.len()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn record_error(&self, variable: &str, reason: String) -> StudyFileError {
+        StudyFileError::Record {
+            path: self.path.clone(),
+            variable: variable.to_owned(),
+            reason,
+        }
+    }
+}
+
+/// Writes `values` into row `row` of the 2-D dataset `ds`, through the float32
+/// `scratch` buffer when storing float32.
+fn write_row(
+    ds: &Dataset,
+    row: usize,
+    values: &[f64],
+    float32: bool,
+    scratch: &mut [f32],
+) -> hdf5::Result<()> {
+    if float32 {
+        let buf = &mut scratch[..values.len()];
+        for (dst, src) in buf.iter_mut().zip(values) {
+            *dst = *src as f32;
+        }
+        ds.write_slice(&*buf, (row, ..))
+    } else {
+        ds.write_slice(values, (row, ..))
+    }
+}
+
+/// Writes one element of the 1-D dataset `ds`.
+fn write_one<T: H5Type>(ds: &Dataset, row: usize, value: T) -> hdf5::Result<()> {
+    ds.write_slice(std::slice::from_ref(&value), row..row + 1)
+}
+
+/// Lays out a new file.
+struct Creator<'a> {
+    path: &'a Path,
+    file: &'a File,
+    layout: &'a Layout,
+}
+
+/// The coordinate variables: name, units, long name. Their order is their netCDF
+/// dimension id.
+const COORDINATES: [(&str, &str, &str); 4] = [
+    (CASE, "1", "case id"),
+    (TIME, "s", "time"),
+    (FREQUENCY, "Hz", "frequency"),
+    (REFERENCE, "1", "reference run id"),
+];
+
+impl Creator<'_> {
+    fn build(&self) -> Result<(), StudyFileError> {
+        let l = self.layout;
+        attributes::write(self.file, FORMAT_ATTR, &FORMAT_VERSION.into())
+            .at(self.path, FORMAT_ATTR)?;
+        for (name, value) in &l.attributes {
+            attributes::write(self.file, name, value).at(self.path, name)?;
+        }
+        let [case, time, frequency, reference] = self.coordinates()?;
+
+        for p in &l.parameters {
+            self.parameter(p, Role::Parameter, &case)?;
+        }
+        let spec = VarSpec::new(
+            REFERENCE_INDEX,
+            "1",
+            "row of the reference run this case is compared with",
+        );
+        let ds = self.with_data(&spec.name, &l.reference_index)?;
+        self.finish_var(&ds, &spec, None, &[&case])?;
+
+        let spec = VarSpec::new(STATUS, "1", "case status");
+        let ds = self.empty::<i8>(STATUS, &[l.n_cases()], Status::Pending.code())?;
+        self.finish_var(&ds, &spec, None, &[&case])?;
+        let flags: Vec<i8> = Status::ALL.iter().map(|s| s.code()).collect();
+        ds.new_attr_builder()
+            .with_data(&flags[..])
+            .create("flag_values")
+            .at(self.path, STATUS)?;
+        attributes::write_str(&ds, "flag_meanings", Status::FLAG_MEANINGS).at(self.path, STATUS)?;
+
+        let spec = VarSpec::new(
+            ERROR_MESSAGE,
+            "1",
+            "why the case failed (empty if it did not)",
+        );
+        // Empty strings rather than HDF5's null fill, which netCDF-C shows as NIL.
+        let empty = vec![VarLenUnicode::new(); l.n_cases()];
+        let ds = self.with_data(ERROR_MESSAGE, &empty)?;
+        self.finish_var(&ds, &spec, None, &[&case])?;
+
+        for spec in &l.metrics {
+            let ds = self.empty::<f64>(&spec.name, &[l.n_cases()], f64::NAN)?;
+            self.finish_var(&ds, spec, Some(Role::Metric), &[&case])?;
+            fill_attr(&ds, false).at(self.path, &spec.name)?;
+        }
+        for (specs, role, dim) in [
+            (&l.series, Role::Series, &time),
+            (&l.spectra, Role::Spectrum, &frequency),
+        ] {
+            for spec in specs {
+                self.array(spec, role, &case, dim)?;
+            }
+        }
+        for p in &l.reference_parameters {
+            self.parameter(p, Role::ReferenceParameter, &reference)?;
+        }
+        for spec in &l.reference_series {
+            self.array(spec, Role::ReferenceSeries, &reference, &time)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the four coordinate variables and makes them dimension scales.
+    fn coordinates(&self) -> Result<[Dataset; 4], StudyFileError> {
+        let l = self.layout;
+        let datasets = [
+            self.with_data(CASE, &l.case_ids)?,
+            self.with_data(TIME, &l.times)?,
+            self.with_data(FREQUENCY, &l.frequencies)?,
+            self.with_data(REFERENCE, &l.reference_ids)?,
+        ];
+        for (dimid, (ds, (name, units, long_name))) in datasets.iter().zip(COORDINATES).enumerate()
+        {
+            set_scale(ds, name).map_err(|source| StudyFileError::Scale {
+                path: self.path.to_owned(),
+                variable: name.to_owned(),
+                source,
+            })?;
+            attributes::write_str(ds, "units", units).at(self.path, name)?;
+            attributes::write_str(ds, "long_name", long_name).at(self.path, name)?;
+            // netCDF-C's dimension id, kept in file order like netCDF-C writes it.
+            ds.new_attr::<i32>()
+                .create("_Netcdf4Dimid")
+                .and_then(|a| a.write_scalar(&(dimid as i32)))
+                .at(self.path, name)?;
+        }
+        Ok(datasets)
+    }
+
+    /// A `[dim]` parameter with its values.
+    fn parameter(&self, p: &Param, role: Role, dim: &Dataset) -> Result<(), StudyFileError> {
+        let ds = match &p.values {
+            ParamValues::F64(v) => self.with_data(&p.spec.name, v)?,
+            ParamValues::Str(v) => {
+                let strings = v
+                    .iter()
+                    .map(|s| attributes::vlen(s))
+                    .collect::<hdf5::Result<Vec<_>>>()
+                    .at(self.path, &p.spec.name)?;
+                self.with_data(&p.spec.name, &strings)?
+            }
+        };
+        self.finish_var(&ds, &p.spec, Some(role), &[dim])
+    }
+
+    /// A `[rows, len]` series or spectrum variable: chunked by row, NaN-filled,
+    /// compressed as the storage options say.
+    fn array(
+        &self,
+        spec: &VarSpec,
+        role: Role,
+        rows: &Dataset,
+        cols: &Dataset,
+    ) -> Result<(), StudyFileError> {
+        let shape = [rows.size(), cols.size()];
+        let ds = if self.layout.storage.float32 {
+            self.empty::<f32>(&spec.name, &shape, f32::NAN)?
+        } else {
+            self.empty::<f64>(&spec.name, &shape, f64::NAN)?
+        };
+        self.finish_var(&ds, spec, Some(role), &[rows, cols])?;
+        fill_attr(&ds, self.layout.storage.float32).at(self.path, &spec.name)
+    }
+
+    /// A contiguous 1-D variable holding `data`.
+    fn with_data<T: H5Type>(&self, name: &str, data: &[T]) -> Result<Dataset, StudyFileError> {
+        self.file
+            .new_dataset_builder()
+            .with_data(data)
+            .create(name)
+            .at(self.path, name)
+    }
+
+    /// An unwritten variable of `shape` with `fill`; 2-D variables are chunked one row
+    /// per chunk and filtered per the storage options, 1-D ones are contiguous.
+    fn empty<T: H5Type>(
+        &self,
+        name: &str,
+        shape: &[usize],
+        fill: T,
+    ) -> Result<Dataset, StudyFileError> {
+        let mut builder = self.file.new_dataset::<T>().fill_value(fill);
+        if let [_, cols] = *shape {
+            builder = builder.chunk((1, cols));
+            let level = self.layout.storage.deflate_level;
+            if level > 0 {
+                builder = builder.shuffle().deflate(level);
+            }
+        }
+        builder.shape(shape).create(name).at(self.path, name)
+    }
+
+    /// Attaches the dimension scales and writes `units`, `long_name` and the role.
+    fn finish_var(
+        &self,
+        ds: &Dataset,
+        spec: &VarSpec,
+        role: Option<Role>,
+        dims: &[&Dataset],
+    ) -> Result<(), StudyFileError> {
+        let name = spec.name.as_str();
+        for (idx, dim) in dims.iter().enumerate() {
+            attach_scale(ds, dim, idx).map_err(|source| StudyFileError::Scale {
+                path: self.path.to_owned(),
+                variable: name.to_owned(),
+                source,
+            })?;
+        }
+        attributes::write_str(ds, "units", &spec.units).at(self.path, name)?;
+        attributes::write_str(ds, "long_name", &spec.long_name).at(self.path, name)?;
+        if let Some(role) = role {
+            attributes::write_str(ds, ROLE_ATTR, role.as_str()).at(self.path, name)?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes the CF `_FillValue` attribute (NaN, of the variable's type).
+fn fill_attr(ds: &Dataset, float32: bool) -> hdf5::Result<()> {
+    if float32 {
+        ds.new_attr::<f32>()
+            .create("_FillValue")?
+            .write_scalar(&f32::NAN)
+    } else {
+        ds.new_attr::<f64>()
+            .create("_FillValue")?
+            .write_scalar(&f64::NAN)
+    }
+}
