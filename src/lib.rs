@@ -22,6 +22,8 @@ pub mod linalg;
 pub mod mechanism;
 pub mod metrics;
 pub mod multibody;
+pub mod output;
+pub mod run;
 pub mod simulate;
 pub mod solve;
 pub mod study;

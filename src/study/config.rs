@@ -190,6 +190,6 @@ pub struct SpectraSection {
 pub struct OutputSection {
     /// `float64` (default) or `float32`.
     pub dtype: Option<S<String>>,
-    /// Deflate level 0..=9 (default 4; 0 = uncompressed).
+    /// Deflate level 0..=9 (default 1; 0 = uncompressed).
     pub compression: Option<S<u8>>,
 }

@@ -55,6 +55,9 @@ impl Effects {
     }
 }
 
+/// One axis of the expansion: parameter name, its values, and its YAML field.
+type Axis<'a> = (&'a String, &'a S<Vec<S<Scalar>>>, String);
+
 /// Where each parameter of a case was set: (parameter, YAML field, line/column).
 type Provenance = Vec<(&'static str, String, (u64, u64))>;
 
@@ -191,7 +194,7 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
         .unwrap_or(DEFAULT_MAX_CASES);
 
     // Axes: each grid axis is a group of one; zip groups vary together.
-    let mut groups: Vec<Vec<(&String, &S<Vec<S<Scalar>>>, String)>> = file
+    let mut groups: Vec<Vec<Axis<'_>>> = file
         .grid
         .iter()
         .map(|(name, values)| vec![(name, values, format!("grid.{name}"))])
@@ -409,7 +412,8 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
         }
     };
     let compression = match &output.compression {
-        None => 4,
+        // Level 1 gets nearly all of deflate's gain on these data (measured: 1.30 vs 1.31 at 4).
+        None => 1,
         Some(c) if c.value <= 9 => c.value,
         Some(c) => {
             return Err(ctx.err(

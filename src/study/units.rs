@@ -1,5 +1,14 @@
 //! Quantities with units: `"40 um"`, `"300 rpm"`, `"9.57e9 N/m^1.5"`, or plain SI numbers.
 
+/// How a unit converts to its dimension's base unit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Factor {
+    /// Multiply by 10^k (applied on the decimal string, so it is exact).
+    Pow10(i32),
+    /// Multiply by this factor.
+    Scale(f64),
+}
+
 /// The physical dimension a parameter has, which decides the units it accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Dimension {
@@ -34,55 +43,56 @@ impl Dimension {
     }
 
     /// Accepted unit spellings with their factor to the base unit.
-    fn units(self) -> &'static [(&'static str, f64)] {
+    fn units(self) -> &'static [(&'static str, Factor)] {
         use std::f64::consts::PI;
+        use Factor::{Pow10 as P, Scale as X};
         match self {
-            Dimension::Dimensionless => &[("1", 1.0)],
+            Dimension::Dimensionless => &[("1", P(0))],
             Dimension::Length => &[
-                ("m", 1.0),
-                ("mm", 1e-3),
-                ("um", 1e-6),
-                ("µm", 1e-6),
-                ("μm", 1e-6),
-                ("nm", 1e-9),
+                ("m", P(0)),
+                ("mm", P(-3)),
+                ("um", P(-6)),
+                ("µm", P(-6)),
+                ("μm", P(-6)),
+                ("nm", P(-9)),
             ],
             Dimension::Speed => &[
-                ("rpm", 1.0),
-                ("rev/min", 1.0),
-                ("rev/s", 60.0),
-                ("Hz", 60.0),
-                ("rad/s", 60.0 / (2.0 * PI)),
+                ("rpm", P(0)),
+                ("rev/min", P(0)),
+                ("rev/s", X(60.0)),
+                ("Hz", X(60.0)),
+                ("rad/s", X(60.0 / (2.0 * PI))),
             ],
             Dimension::Stiffness => &[
-                ("N m-1.5", 1.0),
-                ("N/m^1.5", 1.0),
-                ("N/m^(3/2)", 1.0),
-                ("N m^-1.5", 1.0),
+                ("N m-1.5", P(0)),
+                ("N/m^1.5", P(0)),
+                ("N/m^(3/2)", P(0)),
+                ("N m^-1.5", P(0)),
             ],
             Dimension::Damping => &[
-                ("N s m-1", 1.0),
-                ("N s/m", 1.0),
-                ("N*s/m", 1.0),
-                ("Ns/m", 1.0),
-                ("kg/s", 1.0),
+                ("N s m-1", P(0)),
+                ("N s/m", P(0)),
+                ("N*s/m", P(0)),
+                ("Ns/m", P(0)),
+                ("kg/s", P(0)),
             ],
             Dimension::Time => &[
-                ("s", 1.0),
-                ("ms", 1e-3),
-                ("us", 1e-6),
-                ("µs", 1e-6),
-                ("μs", 1e-6),
+                ("s", P(0)),
+                ("ms", P(-3)),
+                ("us", P(-6)),
+                ("µs", P(-6)),
+                ("μs", P(-6)),
             ],
-            Dimension::Frequency => &[("Hz", 1.0), ("kHz", 1e3), ("MHz", 1e6)],
-            Dimension::Mass => &[("kg", 1.0), ("g", 1e-3)],
+            Dimension::Frequency => &[("Hz", P(0)), ("kHz", P(3)), ("MHz", P(6))],
+            Dimension::Mass => &[("kg", P(0)), ("g", P(-3))],
             Dimension::Inertia => &[
-                ("kg m2", 1.0),
-                ("kg m^2", 1.0),
-                ("kg*m^2", 1.0),
-                ("kg mm^2", 1e-6),
+                ("kg m2", P(0)),
+                ("kg m^2", P(0)),
+                ("kg*m^2", P(0)),
+                ("kg mm^2", P(-6)),
             ],
-            Dimension::Angle => &[("rad", 1.0), ("deg", PI / 180.0)],
-            Dimension::Pressure => &[("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)],
+            Dimension::Angle => &[("rad", P(0)), ("deg", X(PI / 180.0))],
+            Dimension::Pressure => &[("Pa", P(0)), ("kPa", P(3)), ("MPa", P(6)), ("GPa", P(9))],
         }
     }
 
@@ -120,16 +130,31 @@ impl Dimension {
         if unit.is_empty() {
             return Ok(value);
         }
-        self.units()
+        let factor = self
+            .units()
             .iter()
             .find(|(name, _)| *name == unit)
-            .map(|(_, factor)| value * factor)
+            .map(|(_, factor)| *factor)
             .ok_or_else(|| {
                 format!(
                     "unknown unit `{unit}` in `{text}`; expected {}",
                     self.accepted()
                 )
-            })
+            })?;
+        Ok(match factor {
+            // Shift the decimal exponent so "40 um" is exactly 40e-6 (correctly rounded).
+            Factor::Pow10(k) => {
+                let num = num.trim();
+                let (mantissa, exp) = match num.find(['e', 'E']) {
+                    Some(i) => (&num[..i], num[i + 1..].parse::<i32>().unwrap_or(0)),
+                    None => (num, 0),
+                };
+                format!("{mantissa}e{}", exp + k)
+                    .parse()
+                    .unwrap_or(value * 10f64.powi(k))
+            }
+            Factor::Scale(x) => value * x,
+        })
     }
 }
 

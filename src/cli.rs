@@ -1,0 +1,245 @@
+//! The command line: builds the clap command and dispatches to the library.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+
+use studyrun::run::{self, RunOptions, Shard};
+use studyrun::simulate::{simulate, Sampling, CHANNELS};
+use studyrun::study::params::lookup;
+use studyrun::study::{Study, StudyError};
+
+/// Exit code: every case ran to the end.
+const EXIT_OK: u8 = 0;
+/// Exit code: an error stopped the run (I/O, HDF5, a worker failure).
+const EXIT_ERROR: u8 = 1;
+/// Exit code: the input is invalid (grid file or command line); nothing ran.
+const EXIT_INVALID: u8 = 2;
+/// Exit code: the study finished and its file is complete, but some cases failed.
+const EXIT_CASES_FAILED: u8 = 3;
+
+const EXAMPLES: &str = "\
+Examples:
+  studyrun studies/paper.yaml                      run the paper's study into paper.h5
+  studyrun studies/paper.yaml -o out.h5 -j 2       two worker threads, chosen output
+  studyrun studies/showcase.yaml --dry-run         list the cases, estimate size and time
+  studyrun studies/showcase.yaml --resume          continue a run that was killed
+  studyrun run grid.yaml --shard 3/8 -o part3.h5   one of 8 shards (e.g. a Slurm array task)
+  studyrun merge all.h5 part*.h5                   combine the shards
+  studyrun inspect out.h5                          summary, status counts, failed cases
+  studyrun validate grid.yaml                      check a grid file without running it
+
+Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.";
+
+/// Parameter studies of a ball bearing with raceway waviness in a slider-crank.
+#[derive(Parser)]
+#[command(name = "studyrun", version, about, after_help = EXAMPLES, args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    run: RunArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a study (the default command).
+    Run(RunArgs),
+    /// Check a grid file and print its cases' count; runs nothing.
+    Validate {
+        /// The grid file (YAML).
+        grid: PathBuf,
+    },
+    /// Summarise a result file: grid, status counts, failed cases with their errors.
+    Inspect {
+        /// The result file (HDF5).
+        file: PathBuf,
+    },
+    /// Combine the shard files of one study into one file.
+    Merge {
+        /// The merged file to write.
+        output: PathBuf,
+        /// The shard files (any order).
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Overwrite OUTPUT if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// The grid file (YAML).
+    #[arg(required = true)]
+    grid: Option<PathBuf>,
+    /// Result file [default: <grid name>.h5 in the current directory].
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Worker threads [default: all cores].
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// Continue an interrupted run from its journal (OUTPUT.journal).
+    #[arg(long, conflicts_with = "force")]
+    resume: bool,
+    /// Overwrite an existing result file and discard any journal.
+    #[arg(long)]
+    force: bool,
+    /// Run only shard K of N (cases whose id % N == K - 1).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
+    /// Print the case table and the estimated size and time; run nothing.
+    #[arg(long)]
+    dry_run: bool,
+    /// No progress output.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// Parses the command line, runs the command and maps the outcome to an exit code.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let outcome = match cli.command {
+        Some(Command::Run(args)) => run_command(args),
+        None => run_command(cli.run),
+        Some(Command::Validate { grid }) => load(&grid).map(|study| {
+            println!(
+                "{}: ok, {} cases ({} ideal references), axes: {}",
+                grid.display(),
+                study.cases.len(),
+                study.references.len(),
+                study.axes.join(", ")
+            );
+            EXIT_OK
+        }),
+        Some(Command::Inspect { file }) => run::inspect(&file).map(|text| {
+            print!("{text}");
+            EXIT_OK
+        }),
+        Some(Command::Merge {
+            output,
+            shards,
+            force,
+        }) => run::merge(&output, &shards, force).map(|n| {
+            println!(
+                "merged {} shard files into {} ({n} cases)",
+                shards.len(),
+                output.display()
+            );
+            EXIT_OK
+        }),
+    };
+    match outcome {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            let code = if e.downcast_ref::<StudyError>().is_some() {
+                EXIT_INVALID
+            } else {
+                EXIT_ERROR
+            };
+            eprintln!("studyrun: error: {e:#}");
+            ExitCode::from(code)
+        }
+    }
+}
+
+fn load(grid: &Path) -> Result<Study> {
+    Ok(Study::load(grid)?)
+}
+
+fn run_command(args: RunArgs) -> Result<u8> {
+    let grid = args.grid.expect("clap requires the grid");
+    let study = load(&grid)?;
+    let output = args
+        .output
+        .unwrap_or_else(|| PathBuf::from(format!("{}.h5", study.name)));
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    if args.dry_run {
+        dry_run(&study, args.shard, jobs)?;
+        return Ok(EXIT_OK);
+    }
+    let opts = RunOptions {
+        output: output.clone(),
+        jobs,
+        resume: args.resume,
+        force: args.force,
+        shard: args.shard,
+        quiet: args.quiet,
+    };
+    let summary = run::run(&study, &opts)?;
+    if !args.quiet {
+        eprintln!(
+            "studyrun: {} cases into {} in {:.2} s ({} ok, {} failed{})",
+            summary.cases,
+            output.display(),
+            summary.wall_time,
+            summary.ok,
+            summary.failed,
+            if summary.resumed > 0 {
+                format!(", {} from the journal", summary.resumed)
+            } else {
+                String::new()
+            }
+        );
+    }
+    Ok(if summary.failed > 0 {
+        EXIT_CASES_FAILED
+    } else {
+        EXIT_OK
+    })
+}
+
+/// The case table, the file size and a time estimate from a short calibration run.
+fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
+    let rows: Vec<usize> = match shard {
+        Some(s) => study.shard(s.k, s.n),
+        None => (0..study.cases.len()).collect(),
+    };
+    let mut header = vec!["case".to_string()];
+    header.extend(study.axes.iter().cloned());
+    println!("{}", header.join("\t"));
+    for &r in &rows {
+        let c = &study.cases[r];
+        let mut line = vec![c.id.to_string()];
+        for axis in &study.axes {
+            line.push(match lookup(axis) {
+                Some(p) => format!("{}", p.get(&c.params)),
+                None => c.params.location.to_string(),
+            });
+        }
+        println!("{}", line.join("\t"));
+    }
+    let n_time = study.sampling.len() as f64;
+    let n_freq = (study.sampling.len() - run::window_start(study)) as f64 / 2.0 + 1.0;
+    let width = if study.float32 { 4.0 } else { 8.0 };
+    let raw = rows.len() as f64
+        * (CHANNELS.len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)
+        * width;
+    // Calibrate on 10 % of the first case's duration.
+    let probe = &study.cases[rows[0]].params;
+    let short = Sampling {
+        duration: 0.1 * study.sampling.duration,
+        ..study.sampling
+    };
+    let t = simulate(probe, &study.solver, &short)
+        .context("calibration run")?
+        .wall_time
+        * 10.0;
+    println!(
+        "\n{} cases ({} ideal references); raw output {:.1} MB before compression (deflate level {}, {}); estimated time ~{:.0} s on {jobs} threads (from {:.3} s for case {})",
+        rows.len(),
+        study.references.len(),
+        raw / 1e6,
+        study.compression,
+        if study.float32 { "float32" } else { "float64" },
+        t * rows.len() as f64 / jobs as f64,
+        t,
+        study.cases[rows[0]].id
+    );
+    Ok(())
+}

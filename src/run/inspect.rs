@@ -1,0 +1,86 @@
+//! `studyrun inspect`: a summary of a result file.
+
+use std::fmt::Write;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+
+use crate::output::{AttrValue, ParamValues, Status, StudyReader};
+
+/// A human-readable summary of the study file at `path`: the study, its grid,
+/// status counts and every failed case with its parameters and error.
+pub fn inspect(path: &Path) -> Result<String> {
+    let r = StudyReader::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let l = r.layout();
+    let attr = |name: &str| match r.attribute(name) {
+        Some(AttrValue::Str(s)) => s.clone(),
+        Some(AttrValue::F64(x)) => x.to_string(),
+        Some(AttrValue::I64(x)) => x.to_string(),
+        None => "?".to_string(),
+    };
+    let statuses = r.statuses()?;
+    let count = |s: Status| statuses.iter().filter(|&&x| x == s).count();
+    let mut out = String::new();
+    let axes = attr("grid_axes");
+    writeln!(out, "file:     {}", path.display())?;
+    writeln!(
+        out,
+        "study:    {} — {}",
+        attr("study_name"),
+        attr("study_description")
+    )?;
+    writeln!(
+        out,
+        "made by:  studyrun {} (commit {}), {}",
+        attr("studyrun_version"),
+        attr("git_commit"),
+        attr("created")
+    )?;
+    writeln!(out, "grid:     {axes}")?;
+    writeln!(
+        out,
+        "sampling: {} s at {} Hz ({} samples), transient {} s, {} frequency bins",
+        attr("duration"),
+        attr("sample_rate"),
+        l.times.len(),
+        attr("transient"),
+        l.frequencies.len()
+    )?;
+    writeln!(out, "solver:   {}", attr("solver"))?;
+    writeln!(out, "effects:  {}", attr("effects"))?;
+    writeln!(
+        out,
+        "cases:    {} in this file of {} in the study: {} ok, {} failed, {} pending",
+        l.case_ids.len(),
+        attr("study_cases"),
+        count(Status::Ok),
+        count(Status::Failed),
+        count(Status::Pending)
+    )?;
+    let failed: Vec<usize> = (0..statuses.len())
+        .filter(|&k| statuses[k] == Status::Failed)
+        .collect();
+    if !failed.is_empty() {
+        writeln!(out, "failed cases:")?;
+    }
+    for row in failed {
+        let mut labels = Vec::new();
+        for axis in axes.split(',').filter(|a| !a.is_empty()) {
+            if let Some(p) = l.parameters.iter().find(|p| p.spec.name == axis) {
+                let v = match &p.values {
+                    ParamValues::F64(v) => format!("{}", v[row]),
+                    ParamValues::Str(v) => v[row].clone(),
+                };
+                labels.push(format!("{axis}={v}"));
+            }
+        }
+        let message = r.read_case(row)?.message;
+        writeln!(
+            out,
+            "  case {} ({}): {message}",
+            l.case_ids[row],
+            labels.join(", ")
+        )?;
+    }
+    Ok(out)
+}

@@ -1,0 +1,142 @@
+//! The study file's [`Layout`] for a study (or a shard of it).
+
+use anyhow::Result;
+
+use super::case::{metric_specs, reference_specs, window_start};
+use super::journal::fnv1a;
+use super::Shard;
+use crate::output::spectrum::frequencies;
+use crate::output::{provenance, Layout, Param, ParamValues, Storage, VarSpec};
+use crate::simulate::CHANNELS;
+use crate::study::params::PARAMETERS;
+use crate::study::Study;
+
+/// Version of the conventions of MODEL.md this engine implements (sign of the crank
+/// moment, force on the housing, cage angle in closed form, decisions of §7).
+pub const MODEL_CONVENTIONS: &str = "MODEL.md (Xu & Li 2014 restated), decisions 7.1-7.5";
+
+/// Identifies a study run: grid text, studyrun version and shard. A journal or a
+/// shard file is only combined with others of the same study.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StudyFingerprint(pub u64);
+
+impl StudyFingerprint {
+    /// The fingerprint of `study` run as `shard`.
+    pub fn of(study: &Study, shard: Option<Shard>) -> Self {
+        let shard = shard.map_or(String::new(), |s| s.to_string());
+        Self(fnv1a(&[
+            study.source.as_bytes(),
+            b"\0",
+            env!("CARGO_PKG_VERSION").as_bytes(),
+            b"\0",
+            shard.as_bytes(),
+        ]))
+    }
+
+    /// As 16 hex digits.
+    pub fn hex(self) -> String {
+        format!("{:016x}", self.0)
+    }
+}
+
+/// The layout of the file for the cases at `rows` (indices into `study.cases`).
+pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
+    let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
+    let k0 = window_start(study);
+    let n_window = study.sampling.len() - k0;
+    let mut parameters: Vec<Param> = PARAMETERS
+        .iter()
+        .map(|p| Param {
+            spec: VarSpec::new(p.name, p.dimension.base_unit(), p.long_name),
+            values: ParamValues::F64(cases.iter().map(|c| p.get(&c.params)).collect()),
+        })
+        .collect();
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "location",
+            "1",
+            "bearing location: ideal, crank_ground or crank_rod",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| c.params.location.name().to_string())
+                .collect(),
+        ),
+    });
+    let reference_parameters = vec![Param {
+        spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
+        values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
+    }];
+    let mut attributes = provenance();
+    let shard_rows = rows.len();
+    attributes.extend([
+        (
+            "title".to_string(),
+            format!("studyrun study {}", study.name).into(),
+        ),
+        ("study_name".to_string(), study.name.clone().into()),
+        (
+            "study_description".to_string(),
+            study.description.clone().into(),
+        ),
+        ("grid_yaml".to_string(), study.source.clone().into()),
+        ("grid_axes".to_string(), study.axes.join(",").into()),
+        ("study_cases".to_string(), (study.cases.len() as i64).into()),
+        ("file_cases".to_string(), (shard_rows as i64).into()),
+        ("model_conventions".to_string(), MODEL_CONVENTIONS.into()),
+        ("solver".to_string(), format!("{:?}", study.solver).into()),
+        ("duration".to_string(), study.sampling.duration.into()),
+        ("sample_rate".to_string(), study.sampling.sample_rate.into()),
+        ("transient".to_string(), study.transient.into()),
+        ("spectrum_window".to_string(), study.window.clone().into()),
+        (
+            "spectrum_normalisation".to_string(),
+            "one-sided amplitude: a sinusoid of amplitude A on a bin reads A; mean not removed"
+                .into(),
+        ),
+        (
+            "effects".to_string(),
+            study.effects.names().join(",").into(),
+        ),
+        (
+            "study_fingerprint".to_string(),
+            StudyFingerprint::of(study, None).hex().into(),
+        ),
+    ]);
+    Ok(Layout {
+        case_ids: cases.iter().map(|c| c.id).collect(),
+        times: study.sampling.times(),
+        frequencies: frequencies(n_window, study.sampling.sample_rate),
+        reference_ids: (0..study.references.len() as u64).collect(),
+        series: CHANNELS
+            .iter()
+            .map(|c| VarSpec::new(c.name, c.units, c.long_name))
+            .collect(),
+        spectra: study
+            .spectrum_channels
+            .iter()
+            .map(|name| {
+                let ch = CHANNELS
+                    .iter()
+                    .find(|c| c.name == *name)
+                    .expect("validated channel");
+                VarSpec::new(
+                    format!("{name}_spectrum"),
+                    ch.units,
+                    format!("one-sided amplitude spectrum of {}", ch.long_name),
+                )
+            })
+            .collect(),
+        metrics: metric_specs(),
+        parameters,
+        reference_parameters,
+        reference_series: reference_specs(),
+        reference_index: cases.iter().map(|c| c.reference as u64).collect(),
+        attributes,
+        storage: Storage {
+            float32: study.float32,
+            deflate_level: study.compression,
+        },
+    })
+}

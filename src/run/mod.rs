@@ -1,0 +1,305 @@
+//! Running a study: cases in parallel (rayon), one writer (the HDF5 library is not
+//! thread-safe), bounded memory, a crash journal, resume, shards and merging.
+//!
+//! Data flow: workers simulate cases and send [`CaseResult`]s through a bounded
+//! channel; the calling thread appends each to the journal, writes it into
+//! `OUT.h5.partial` and reports progress. At the end the partial file is renamed
+//! to `OUT.h5` (atomic) and the journal removed. Case data do not depend on the
+//! number of threads: each case is simulated on its own, in one thread.
+
+mod case;
+mod inspect;
+mod journal;
+mod layout;
+mod merge;
+mod progress;
+
+pub use case::{metric_specs, run_case, window_start, CaseResult, REFERENCE_CHANNELS};
+pub use inspect::inspect;
+pub use journal::{fnv1a, JournalError, JournalHeader, JournalReader, JournalWriter};
+pub use layout::{study_layout, StudyFingerprint, MODEL_CONVENTIONS};
+pub use merge::merge;
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::sync_channel;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
+
+use crate::output::spectrum::{SpectrumPlan, Window};
+use crate::output::{Status, StudyWriter};
+use crate::simulate::{simulate, CaseOutput};
+use crate::study::Study;
+
+/// A part of a study: shard `k` of `n` (1-based).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 1..=n.
+    pub k: u64,
+    /// Number of shards.
+    pub n: u64,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let err = || format!("`{s}` is not a shard: expected K/N with 1 <= K <= N, e.g. 3/8");
+        let (k, n) = s.split_once('/').ok_or_else(err)?;
+        let (k, n): (u64, u64) = (
+            k.trim().parse().map_err(|_| err())?,
+            n.trim().parse().map_err(|_| err())?,
+        );
+        if k == 0 || n == 0 || k > n {
+            return Err(err());
+        }
+        Ok(Self { k, n })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.k, self.n)
+    }
+}
+
+/// How to run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The result file.
+    pub output: PathBuf,
+    /// Worker threads (≥ 1).
+    pub jobs: usize,
+    /// Continue an interrupted run from its journal.
+    pub resume: bool,
+    /// Overwrite an existing result file (and discard a journal).
+    pub force: bool,
+    /// Run only this shard.
+    pub shard: Option<Shard>,
+    /// No progress output.
+    pub quiet: bool,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Cases in this run (the shard, or the whole study).
+    pub cases: usize,
+    /// Cases that ran to the end.
+    pub ok: usize,
+    /// Cases that failed (recorded in the file with their message).
+    pub failed: usize,
+    /// Cases taken from the journal of an interrupted run.
+    pub resumed: usize,
+    /// Wall-clock time (s).
+    pub wall_time: f64,
+}
+
+/// The journal and partial-file paths that belong to `output`.
+pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
+    let with = |ext: &str| {
+        let mut s = output.as_os_str().to_owned();
+        s.push(ext);
+        PathBuf::from(s)
+    };
+    (with(".journal"), with(".partial"))
+}
+
+/// The ideal-mechanism runs every case is compared with.
+pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>> {
+    study
+        .references
+        .par_iter()
+        .enumerate()
+        .map(|(k, r)| {
+            simulate(r, &study.solver, &study.sampling)
+                .with_context(|| format!("reference (ideal mechanism) {k} at {} rpm", r.rpm))
+        })
+        .collect()
+}
+
+/// The spectrum window of a study.
+pub fn window_of(study: &Study) -> Window {
+    if study.window == "rectangular" {
+        Window::Rectangular
+    } else {
+        Window::Hann
+    }
+}
+
+/// Runs `study` (or a shard of it) into `opts.output`.
+pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
+    let start = Instant::now();
+    let rows: Vec<usize> = match opts.shard {
+        Some(s) => study.shard(s.k, s.n),
+        None => (0..study.cases.len()).collect(),
+    };
+    if rows.is_empty() {
+        bail!(
+            "shard {} of a {}-case study has no cases",
+            opts.shard.map_or(String::new(), |s| s.to_string()),
+            study.cases.len()
+        );
+    }
+    let (journal_path, partial_path) = side_paths(&opts.output);
+    if opts.force {
+        for p in [&opts.output, &journal_path, &partial_path] {
+            if p.exists() {
+                std::fs::remove_file(p)
+                    .with_context(|| format!("cannot remove {}", p.display()))?;
+            }
+        }
+    } else if opts.output.exists() {
+        bail!(
+            "{} exists; use --force to overwrite it",
+            opts.output.display()
+        );
+    } else if journal_path.exists() && !opts.resume {
+        bail!(
+            "{} holds an interrupted run; use --resume to continue it or --force to start over",
+            journal_path.display()
+        );
+    } else if opts.resume && !journal_path.exists() {
+        bail!(
+            "nothing to resume: {} does not exist",
+            journal_path.display()
+        );
+    }
+
+    let references = run_references(study)?;
+    let layout = study_layout(study, &rows)?;
+    let header = JournalHeader {
+        fingerprint: StudyFingerprint::of(study, opts.shard).0,
+        n_time: layout.times.len() as u64,
+        n_series: layout.series.len() as u64,
+        n_freq: layout.frequencies.len() as u64,
+        n_spectra: layout.spectra.len() as u64,
+        n_metrics: layout.metrics.len() as u64,
+    };
+    let mut writer = StudyWriter::create(&partial_path, &layout)
+        .with_context(|| format!("cannot create {}", partial_path.display()))?;
+    for (k, r) in references.iter().enumerate() {
+        let series: Vec<&[f64]> = REFERENCE_CHANNELS
+            .iter()
+            .map(|c| r.channel(c).expect("reference channel"))
+            .collect();
+        writer.write_reference(k, &series)?;
+    }
+
+    // Replay what an interrupted run finished.
+    let mut done = HashSet::new();
+    let (mut ok, mut failed) = (0usize, 0usize);
+    let mut journal = if opts.resume {
+        let mut reader = JournalReader::open(&journal_path, &header)?;
+        while let Some(rec) = reader.next_record() {
+            if rec.row < rows.len() && done.insert(rec.row) {
+                write_record(&mut writer, &rec)?;
+                if rec.status == Status::Ok {
+                    ok += 1
+                } else {
+                    failed += 1
+                }
+            }
+        }
+        JournalWriter::append(&journal_path, reader.valid_len())?
+    } else {
+        JournalWriter::create(&journal_path, &header)
+            .with_context(|| format!("cannot create {}", journal_path.display()))?
+    };
+    let resumed = done.len();
+    let pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
+
+    let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.jobs.max(1))
+        .build()?;
+    let k0 = window_start(study);
+    let n_window = layout.times.len() - k0;
+    let window = window_of(study);
+    // At most two results per worker wait for the writer: memory stays bounded.
+    let (tx, rx) = sync_channel::<CaseResult>(2 * opts.jobs.max(1));
+    let n_pending = pending.len();
+    let (rows_ref, refs) = (&rows, &references);
+    let received = std::thread::scope(|scope| -> Result<usize> {
+        // The workers own the sender: when they end, normally or not, the channel closes.
+        scope.spawn(move || {
+            pool.install(|| {
+                pending.par_iter().try_for_each_init(
+                    || {
+                        SpectrumPlan::new(n_window, window)
+                            .expect("window length checked by the layout")
+                    },
+                    |plan, &row| {
+                        let case = &study.cases[rows_ref[row]];
+                        tx.send(run_case(
+                            study,
+                            row,
+                            &case.params,
+                            &refs[case.reference],
+                            plan,
+                        ))
+                    },
+                )
+            })
+        });
+        let mut received = 0;
+        for rec in rx.iter() {
+            journal
+                .write(&rec)
+                .with_context(|| format!("cannot append to {}", journal_path.display()))?;
+            write_record(&mut writer, &rec)?;
+            if rec.status == Status::Ok {
+                ok += 1
+            } else {
+                failed += 1
+            }
+            progress.case_done(rec.status != Status::Ok);
+            received += 1;
+        }
+        Ok(received)
+    })?;
+    if received != n_pending {
+        bail!("a worker thread stopped after {received} of {n_pending} cases; rerun with --resume");
+    }
+    progress.finish();
+    writer
+        .finish()
+        .with_context(|| format!("cannot finish {}", partial_path.display()))?;
+    std::fs::rename(&partial_path, &opts.output).with_context(|| {
+        format!(
+            "cannot rename {} to {}",
+            partial_path.display(),
+            opts.output.display()
+        )
+    })?;
+    drop(journal);
+    std::fs::remove_file(&journal_path)
+        .with_context(|| format!("cannot remove {}", journal_path.display()))?;
+    Ok(RunSummary {
+        cases: rows.len(),
+        ok,
+        failed,
+        resumed,
+        wall_time: start.elapsed().as_secs_f64(),
+    })
+}
+
+use progress::Progress;
+
+/// Writes one case result into the file.
+pub fn write_record(writer: &mut StudyWriter, rec: &CaseResult) -> Result<()> {
+    let series: Vec<&[f64]> = rec.series.iter().map(Vec::as_slice).collect();
+    let spectra: Vec<&[f64]> = rec.spectra.iter().map(Vec::as_slice).collect();
+    writer.write_case(
+        rec.row,
+        &crate::output::CaseRecord {
+            series: &series,
+            spectra: &spectra,
+            metrics: &rec.metrics,
+            status: rec.status,
+            message: &rec.message,
+        },
+    )?;
+    Ok(())
+}

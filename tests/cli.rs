@@ -1,0 +1,258 @@
+//! The `studyrun` command end to end: run, refusals, failed cases, resume after a
+//! kill, shards and merge, thread-count independence.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use studyrun::output::StudyReader;
+
+fn studyrun(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A small study: 12 cases of 50 ms.
+const SMALL: &str = "name: small\nduration: 0.05\nsample_rate: 10000\ntransient: \"0.01 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 11]\n  rpm: [600]\n";
+
+/// Asserts two study files hold the same data: layout (but the `created` time),
+/// every case's series, spectra, metrics (but wall time), status and message.
+fn assert_same_data(a: &Path, b: &Path) {
+    let (ra, rb) = (StudyReader::open(a).unwrap(), StudyReader::open(b).unwrap());
+    let (la, lb) = (ra.layout(), rb.layout());
+    assert_eq!(la.case_ids, lb.case_ids);
+    assert_eq!(la.times, lb.times);
+    assert_eq!(la.frequencies, lb.frequencies);
+    assert_eq!(la.parameters, lb.parameters);
+    assert_eq!(la.reference_index, lb.reference_index);
+    assert_eq!(la.metrics, lb.metrics);
+    let wall = la
+        .metrics
+        .iter()
+        .position(|m| m.name == "wall_time")
+        .unwrap();
+    for row in 0..la.case_ids.len() {
+        let (mut ca, mut cb) = (ra.read_case(row).unwrap(), rb.read_case(row).unwrap());
+        ca.metrics[wall] = 0.0;
+        cb.metrics[wall] = 0.0;
+        // Bitwise, NaN included.
+        assert_eq!(
+            format!("{ca:?}"),
+            format!("{cb:?}"),
+            "case row {row} differs"
+        );
+    }
+    for k in 0..la.reference_ids.len() {
+        assert_eq!(ra.read_reference(k).unwrap(), rb.read_reference(k).unwrap());
+    }
+}
+
+#[test]
+fn runs_a_study_and_refuses_to_overwrite_without_force() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "small.yaml", SMALL);
+    let out = studyrun(dir.path(), &["small.yaml", "-j", "2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        dir.path().join("small.h5").exists(),
+        "default output is <name>.h5"
+    );
+    assert!(
+        !dir.path().join("small.h5.journal").exists()
+            && !dir.path().join("small.h5.partial").exists()
+    );
+    let again = studyrun(dir.path(), &["small.yaml"]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("exists; use --force"));
+    assert!(
+        studyrun(dir.path(), &["run", "small.yaml", "--force", "-q"])
+            .status
+            .success()
+    );
+    let inspect = studyrun(dir.path(), &["inspect", "small.h5"]);
+    let text = String::from_utf8_lossy(&inspect.stdout);
+    assert!(
+        text.contains("12 in this file of 12 in the study: 12 ok, 0 failed, 0 pending"),
+        "{text}"
+    );
+}
+
+#[test]
+fn invalid_grid_exits_2_naming_the_place() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "bad.yaml",
+        "name: bad\nduration: 0.05\nsample_rate: 10000\ngrid:\n  ball_count: [8, 2]\n",
+    );
+    let out = studyrun(dir.path(), &["bad.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.yaml:5:") && err.contains("grid.ball_count[1]") && err.contains(">= 3"),
+        "{err}"
+    );
+    assert!(!dir.path().join("bad.h5").exists());
+    let validate = studyrun(dir.path(), &["validate", "bad.yaml"]);
+    assert_eq!(validate.status.code(), Some(2));
+}
+
+#[test]
+fn a_failed_case_is_recorded_while_the_others_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    // At 60 000 rpm the step budget runs out; the 600 rpm cases need far fewer steps.
+    write(dir.path(), "fail.yaml", "name: fail\nduration: 0.05\nsample_rate: 10000\nsolver:\n  max_steps: 20000\ngrid:\n  rpm: [600, 60000]\n  ball_count: [8, 9]\n");
+    let out = studyrun(dir.path(), &["fail.yaml", "-q"]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = StudyReader::open(dir.path().join("fail.h5")).unwrap();
+    let statuses = r.statuses().unwrap();
+    use studyrun::output::Status::{Failed, Ok};
+    assert_eq!(statuses, [Ok, Ok, Failed, Failed]);
+    let failed = r.read_case(2).unwrap();
+    assert!(
+        failed.message.contains("step budget exhausted"),
+        "{}",
+        failed.message
+    );
+    assert!(failed.series.iter().flatten().all(|v| v.is_nan()));
+    let ok = r.read_case(0).unwrap();
+    assert!(
+        ok.series
+            .iter()
+            .flatten()
+            .all(|v| v.is_finite() || v.is_nan())
+            && ok.message.is_empty()
+    );
+    let inspect =
+        String::from_utf8_lossy(&studyrun(dir.path(), &["inspect", "fail.h5"]).stdout).to_string();
+    assert!(
+        inspect.contains("case 2 (rpm=60000, ball_count=8): step budget exhausted"),
+        "{inspect}"
+    );
+}
+
+#[test]
+fn same_data_for_any_number_of_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "small.yaml", SMALL);
+    assert!(
+        studyrun(dir.path(), &["small.yaml", "-j", "1", "-o", "one.h5", "-q"])
+            .status
+            .success()
+    );
+    assert!(
+        studyrun(dir.path(), &["small.yaml", "-j", "2", "-o", "two.h5", "-q"])
+            .status
+            .success()
+    );
+    assert_same_data(&dir.path().join("one.h5"), &dir.path().join("two.h5"));
+}
+
+#[test]
+fn shards_merge_into_the_single_run() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "small.yaml", SMALL);
+    assert!(
+        studyrun(dir.path(), &["small.yaml", "-o", "whole.h5", "-q"])
+            .status
+            .success()
+    );
+    for k in 1..=3 {
+        let out = studyrun(
+            dir.path(),
+            &[
+                "run",
+                "small.yaml",
+                "--shard",
+                &format!("{k}/3"),
+                "-o",
+                &format!("part{k}.h5"),
+                "-q",
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let incomplete = studyrun(dir.path(), &["merge", "merged.h5", "part1.h5", "part3.h5"]);
+    assert_eq!(incomplete.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&incomplete.stderr).contains("8 of the study's 12 cases"));
+    let out = studyrun(
+        dir.path(),
+        &["merge", "merged.h5", "part3.h5", "part1.h5", "part2.h5"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_same_data(&dir.path().join("whole.h5"), &dir.path().join("merged.h5"));
+}
+
+/// kill -9 in the middle of a run leaves no result file (only the journal); `--resume`
+/// finishes it, and the file equals an uninterrupted run's.
+#[test]
+fn resume_after_kill_gives_the_uninterrupted_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = "name: long\nduration: 0.2\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
+    write(dir.path(), "long.yaml", grid);
+    let journal = dir.path().join("long.h5.journal");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(dir.path())
+        .args(["long.yaml", "-j", "1", "-q"])
+        .spawn()
+        .unwrap();
+    // Wait until a few cases are in the journal, then kill -9.
+    let start = Instant::now();
+    while std::fs::metadata(&journal).map_or(0, |m| m.len()) < 3 * 100_000 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no progress");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run finished before it could be killed"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(
+        !dir.path().join("long.h5").exists(),
+        "a killed run must not leave a result file"
+    );
+    assert!(journal.exists());
+    let refused = studyrun(dir.path(), &["long.yaml"]);
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
+    let resumed = studyrun(dir.path(), &["long.yaml", "--resume"]);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(String::from_utf8_lossy(&resumed.stderr).contains("from the journal"));
+    assert!(!journal.exists());
+    assert!(
+        studyrun(dir.path(), &["long.yaml", "-o", "straight.h5", "-q"])
+            .status
+            .success()
+    );
+    assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
+}
