@@ -30,6 +30,7 @@ Examples:
   studyrun merge all.h5 part*.h5                   combine the shards
   studyrun inspect out.h5                          summary, status counts, failed cases
   studyrun validate grid.yaml                      check a grid file without running it
+  studyrun accuracy studies/accuracy.yaml          error and cost of every integrator setting
 
 Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.";
 
@@ -56,6 +57,22 @@ enum Command {
     Inspect {
         /// The result file (HDF5).
         file: PathBuf,
+    },
+    /// Measure what accuracy costs: every integrator over a ladder of settings against
+    /// a tight reference, for each case of the grid; prints a table and the cheapest
+    /// setting whose metric error stays below 1 %.
+    Accuracy {
+        /// The grid file (YAML); its solver settings are ignored.
+        grid: PathBuf,
+        /// Result file [default: <grid name>_accuracy.h5].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Worker threads [default: all cores].
+        #[arg(short, long)]
+        jobs: Option<usize>,
+        /// Overwrite OUTPUT if it exists.
+        #[arg(long)]
+        force: bool,
     },
     /// Combine the shard files of one study into one file.
     Merge {
@@ -118,6 +135,12 @@ pub fn main() -> ExitCode {
             print!("{text}");
             EXIT_OK
         }),
+        Some(Command::Accuracy {
+            grid,
+            output,
+            jobs,
+            force,
+        }) => accuracy_command(&grid, output, jobs, force),
         Some(Command::Merge {
             output,
             shards,
@@ -242,4 +265,89 @@ fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
         study.cases[rows[0]].id
     );
     Ok(())
+}
+
+fn accuracy_command(
+    grid: &Path,
+    output: Option<PathBuf>,
+    jobs: Option<usize>,
+    force: bool,
+) -> Result<u8> {
+    use studyrun::accuracy::{self, describe, ERROR_CHANNELS};
+    let study = load(grid)?;
+    let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
+    if output.exists() && !force {
+        anyhow::bail!("{} exists; use --force to overwrite it", output.display());
+    }
+    let jobs = jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
+    let ladder = accuracy::default_ladder();
+    eprintln!(
+        "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
+        ladder.len(),
+        study.cases.len()
+    );
+    let (refs, ms) = pool.install(|| accuracy::run(&study, &ladder))?;
+    for r in &refs {
+        let c = &study.cases[r.case];
+        let labels: Vec<String> = study
+            .axes
+            .iter()
+            .map(|a| match lookup(a) {
+                Some(p) => format!("{a}={}", p.get(&c.params)),
+                None => format!("{a}={}", c.params.location),
+            })
+            .collect();
+        println!(
+            "\ncase {} ({}): horizon {:.3} s of {} s{}; reference metric uncertainty {:.1e} / {:.1e} / {:.1e}",
+            c.id,
+            labels.join(", "),
+            r.horizon,
+            study.sampling.duration,
+            if r.horizon < study.sampling.duration { " (chaotic: pointwise errors up to the horizon only)" } else { "" },
+            r.metric_uncertainty[0],
+            r.metric_uncertainty[1],
+            r.metric_uncertainty[2]
+        );
+        println!("| method | setting | max err {0} | rms err {0} | metric err {0} | metric err {1} | metric err {2} | wall (s) | steps | rejected | RHS |", ERROR_CHANNELS[0], ERROR_CHANNELS[1], ERROR_CHANNELS[2]);
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        for m in ms.iter().filter(|m| m.case == r.case) {
+            let (name, setting) = describe(&m.method);
+            match &m.error {
+                Some(e) => println!("| {name} | {setting:.0e} | failed: {e} |"),
+                None => println!(
+                    "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.3} | {} | {} | {} |",
+                    m.max_error[0], m.rms_error[0], m.metric_error[0], m.metric_error[1], m.metric_error[2], m.wall_time, m.steps, m.rejected, m.rhs_evals
+                ),
+            }
+        }
+    }
+    println!("\nover all cases (metric error: worst channel, worst case):");
+    println!("| method | setting | worst metric error | median metric error | total wall (s) | total RHS |");
+    println!("|---|---|---|---|---|---|");
+    for method in &ladder {
+        let rows: Vec<_> = ms.iter().filter(|m| m.method == *method).collect();
+        let mut errs: Vec<f64> = rows
+            .iter()
+            .map(|m| m.metric_error.iter().copied().fold(0.0, f64::max))
+            .collect();
+        errs.sort_by(f64::total_cmp);
+        let (name, setting) = describe(method);
+        println!(
+            "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.2} | {} |",
+            errs.last().copied().unwrap_or(f64::NAN),
+            errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN),
+            rows.iter().map(|m| m.wall_time).sum::<f64>(),
+            rows.iter().map(|m| m.rhs_evals).sum::<u64>()
+        );
+    }
+    match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01) {
+        Some((m, judged)) => println!("\ncheapest setting with metric error < 1 % on the {judged} cases whose reference metric is known to 0.5 %: {m:?}"),
+        None => println!("\nno setting keeps the metric error below 1 % on every judged case"),
+    }
+    accuracy::write_file(&output, &study, &refs, &ms)?;
+    eprintln!("studyrun: wrote {}", output.display());
+    Ok(EXIT_OK)
 }

@@ -16,6 +16,7 @@
 //! Units are SI throughout (m, kg, s, N, rad) unless a name says otherwise.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod bearing;
 pub mod error;
 pub mod linalg;

@@ -1,0 +1,456 @@
+//! What accuracy costs in time: every integrator over a ladder of settings against a
+//! tight reference, per case of a grid (`studyrun accuracy GRID.yaml`).
+//!
+//! **Reference.** DOPRI5 at rtol 1e-12 (atol 1e-16), validated by a second run at
+//! rtol 1e-11: where the two agree the reference's own error is below their
+//! difference. The first time their slider accelerations differ by more than
+//! [`HORIZON_THRESHOLD`] of its range is the case's **predictability horizon**
+//! (MODEL.md §8: chaotic cases part after tens of milliseconds); if they never do,
+//! the horizon is the whole run.
+//!
+//! **Errors** per channel (slider acceleration, crank moment, bearing force): the
+//! largest and the RMS difference from the reference, relative to the reference's
+//! range, over `[0, horizon]` only — past it pointwise errors measure chaos, not the
+//! integrator. **Metric error**: the relative error of the vibration metric a user
+//! reads (RMS deviation from the ideal mechanism over `t ≥ transient`, a statistic
+//! that stays meaningful past the horizon), next to the reference's own metric
+//! uncertainty (the 1e-11 run's metric against the 1e-12 run's).
+//!
+//! **Cost** per setting: wall time, steps, rejected steps, RHS evaluations.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::metrics::{vibration_metrics, VibrationMetrics};
+use crate::simulate::{simulate, CaseOutput};
+use crate::solve::{Method, SolverSettings};
+use crate::study::Study;
+
+/// Relative separation (of the slider acceleration's range) that ends the
+/// predictability horizon.
+pub const HORIZON_THRESHOLD: f64 = 1e-3;
+
+/// Channels whose errors are measured, in order.
+pub const ERROR_CHANNELS: [&str; 3] = ["slider_acceleration", "crank_moment", "bearing_force"];
+
+/// The reference setting.
+pub const REFERENCE: Method = Method::DormandPrince {
+    rtol: 1e-12,
+    atol: 1e-16,
+};
+/// The setting that validates the reference.
+pub const CHECK: Method = Method::DormandPrince {
+    rtol: 1e-11,
+    atol: 1e-15,
+};
+
+/// The default ladder: DOPRI5 and SDIRK4 over tolerances, RK4 over steps including
+/// the paper's 20 µs. `atol = 1e-4 rtol` (state units: m, m/s).
+pub fn default_ladder() -> Vec<Method> {
+    let mut ladder: Vec<Method> = (3..=10)
+        .map(|k| Method::DormandPrince {
+            rtol: 10f64.powi(-k),
+            atol: 10f64.powi(-k - 4),
+        })
+        .collect();
+    ladder.extend((3..=8).map(|k| Method::Sdirk4 {
+        rtol: 10f64.powi(-k),
+        atol: 10f64.powi(-k - 4),
+    }));
+    ladder.extend([80e-6, 40e-6, 20e-6, 10e-6, 5e-6].map(|step| Method::Rk4 { step }));
+    ladder
+}
+
+/// Name and setting value of a method: (`dopri5` | `sdirk4` | `rk4`, rtol or step in s).
+pub fn describe(m: &Method) -> (&'static str, f64) {
+    match *m {
+        Method::DormandPrince { rtol, .. } => ("dopri5", rtol),
+        Method::Sdirk4 { rtol, .. } => ("sdirk4", rtol),
+        Method::Rk4 { step } => ("rk4", step),
+    }
+}
+
+/// The reference of one case and what it says about predictability.
+#[derive(Debug, Clone)]
+pub struct CaseReference {
+    /// Index of the case in the study.
+    pub case: usize,
+    /// The reference run.
+    pub reference: CaseOutput,
+    /// Its metrics against the ideal mechanism.
+    pub metrics: VibrationMetrics,
+    /// Predictability horizon (s); the run's duration if the two tight runs never part.
+    pub horizon: f64,
+    /// Relative difference of each channel's metric between the 1e-11 and 1e-12 runs.
+    pub metric_uncertainty: [f64; 3],
+}
+
+/// One setting's run of one case, measured.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    /// Index of the case in the study.
+    pub case: usize,
+    /// The setting.
+    pub method: Method,
+    /// Largest error per channel, relative to the reference's range, over `[0, horizon]`.
+    pub max_error: [f64; 3],
+    /// RMS error per channel, relative to the reference's range, over `[0, horizon]`.
+    pub rms_error: [f64; 3],
+    /// Relative error of each channel's vibration metric.
+    pub metric_error: [f64; 3],
+    /// Wall time (s), steps, rejected steps, RHS evaluations; NaN/0 if it failed.
+    pub wall_time: f64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps.
+    pub rejected: u64,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Why the run failed, if it did.
+    pub error: Option<String>,
+}
+
+fn channels<'a>(o: &'a CaseOutput, m: &VibrationMetrics) -> [(&'a [f64], f64); 3] {
+    [
+        (
+            o.channel("slider_acceleration").expect("channel"),
+            m.slider_acceleration.rms,
+        ),
+        (
+            o.channel("crank_moment").expect("channel"),
+            m.crank_moment.rms,
+        ),
+        (
+            o.channel("bearing_force").expect("channel"),
+            m.bearing_force.rms,
+        ),
+    ]
+}
+
+fn range(v: &[f64]) -> f64 {
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+            (l.min(*x), h.max(*x))
+        });
+    hi - lo
+}
+
+fn relative(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+/// Reference, check and horizon for case `k` of `study`; `ideal` is its ideal mechanism.
+pub fn reference(
+    study: &Study,
+    k: usize,
+    ideal: &CaseOutput,
+) -> Result<CaseReference, crate::simulate::CaseError> {
+    let params = &study.cases[k].params;
+    let reference = simulate(params, &SolverSettings::new(REFERENCE), &study.sampling)?;
+    let check = simulate(params, &SolverSettings::new(CHECK), &study.sampling)?;
+    let (m_ref, m_chk) = (
+        vibration_metrics(&reference, ideal, study.transient),
+        vibration_metrics(&check, ideal, study.transient),
+    );
+    let (a, b) = (
+        reference.channel("slider_acceleration").expect("channel"),
+        check.channel("slider_acceleration").expect("channel"),
+    );
+    let scale = range(a);
+    let horizon = a
+        .iter()
+        .zip(b)
+        .zip(&reference.times)
+        .find(|((x, y), _)| (*x - *y).abs() > HORIZON_THRESHOLD * scale)
+        .map_or(study.sampling.duration, |(_, t)| *t);
+    let (cr, cc) = (channels(&reference, &m_ref), channels(&check, &m_chk));
+    let metric_uncertainty = [0, 1, 2].map(|c| relative(cc[c].1, cr[c].1));
+    Ok(CaseReference {
+        case: k,
+        reference,
+        metrics: m_ref,
+        horizon,
+        metric_uncertainty,
+    })
+}
+
+/// Runs `method` on the case of `r` and measures it against the reference.
+pub fn measure(
+    study: &Study,
+    r: &CaseReference,
+    method: Method,
+    ideal: &CaseOutput,
+) -> Measurement {
+    let start = Instant::now();
+    let run = simulate(
+        &study.cases[r.case].params,
+        &SolverSettings::new(method),
+        &study.sampling,
+    );
+    let wall_time = start.elapsed().as_secs_f64();
+    let mut m = Measurement {
+        case: r.case,
+        method,
+        max_error: [f64::NAN; 3],
+        rms_error: [f64::NAN; 3],
+        metric_error: [f64::NAN; 3],
+        wall_time,
+        steps: 0,
+        rejected: 0,
+        rhs_evals: 0,
+        error: None,
+    };
+    let out = match run {
+        Ok(out) => out,
+        Err(e) => {
+            m.error = Some(e.to_string());
+            return m;
+        }
+    };
+    let metrics = vibration_metrics(&out, ideal, study.transient);
+    let n = r
+        .reference
+        .times
+        .iter()
+        .take_while(|t| **t <= r.horizon)
+        .count()
+        .max(1);
+    let (got, want) = (channels(&out, &metrics), channels(&r.reference, &r.metrics));
+    for c in 0..3 {
+        let scale = range(want[c].0);
+        let diffs = got[c].0[..n]
+            .iter()
+            .zip(&want[c].0[..n])
+            .map(|(a, b)| a - b);
+        m.max_error[c] = diffs.clone().fold(0.0f64, |acc, d| acc.max(d.abs())) / scale;
+        m.rms_error[c] = (diffs.map(|d| d * d).sum::<f64>() / n as f64).sqrt() / scale;
+        m.metric_error[c] = relative(got[c].1, want[c].1);
+    }
+    m.steps = out.stats.steps;
+    m.rejected = out.stats.rejected;
+    m.rhs_evals = out.stats.rhs_evals;
+    m
+}
+
+/// The whole accuracy study: references for every case, then every setting of
+/// `ladder` on every case (in parallel on the current rayon pool).
+pub fn run(
+    study: &Study,
+    ladder: &[Method],
+) -> anyhow::Result<(Vec<CaseReference>, Vec<Measurement>)> {
+    let ideals = crate::run::run_references(study)?;
+    let references: Vec<CaseReference> = (0..study.cases.len())
+        .into_par_iter()
+        .map(|k| reference(study, k, &ideals[study.cases[k].reference]))
+        .collect::<Result<_, _>>()?;
+    let jobs: Vec<(usize, Method)> = references
+        .iter()
+        .enumerate()
+        .flat_map(|(i, _)| ladder.iter().map(move |m| (i, *m)))
+        .collect();
+    let measurements = jobs
+        .par_iter()
+        .map(|&(i, m)| {
+            let r = &references[i];
+            measure(study, r, m, &ideals[study.cases[r.case].reference])
+        })
+        .collect();
+    Ok((references, measurements))
+}
+
+/// The cheapest setting (least total wall time over the cases) whose metric error
+/// stays below `bound` on every case whose reference metric is itself known to
+/// better than `bound / 2` (cases beyond that are chaotic within the analysed
+/// window: no setting can be judged on them to `bound`). Returns the setting and
+/// the number of cases that judged it.
+pub fn cheapest_within(
+    measurements: &[Measurement],
+    references: &[CaseReference],
+    ladder: &[Method],
+    bound: f64,
+) -> Option<(Method, usize)> {
+    let judged: Vec<usize> = references
+        .iter()
+        .filter(|r| r.metric_uncertainty.iter().all(|u| *u < bound / 2.0))
+        .map(|r| r.case)
+        .collect();
+    ladder
+        .iter()
+        .filter_map(|method| {
+            let rows: Vec<&Measurement> = measurements
+                .iter()
+                .filter(|m| m.method == *method && judged.contains(&m.case))
+                .collect();
+            let ok = !rows.is_empty()
+                && rows
+                    .iter()
+                    .all(|m| m.error.is_none() && m.metric_error.iter().all(|e| *e < bound));
+            ok.then(|| (*method, rows.iter().map(|m| m.wall_time).sum::<f64>()))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(m, _)| (m, judged.len()))
+}
+
+/// Writes the measurements as a study-style file: one row (`case` dimension) per
+/// (case, setting), with the case's parameters, `source_case`, `method`, `setting`
+/// (rtol, or the RK4 step in s), the case's `horizon` and reference metric
+/// uncertainties, and the errors and costs as metrics. Rows whose run failed have
+/// status failed and the error message.
+pub fn write_file(
+    path: &std::path::Path,
+    study: &Study,
+    references: &[CaseReference],
+    ms: &[Measurement],
+) -> anyhow::Result<()> {
+    use crate::output::{
+        provenance, CaseRecord, Layout, Param, ParamValues, Status, Storage, StudyWriter, VarSpec,
+    };
+    use crate::study::params::PARAMETERS;
+    let case = |m: &Measurement| &study.cases[m.case].params;
+    let reference_of = |m: &Measurement| {
+        references
+            .iter()
+            .find(|r| r.case == m.case)
+            .expect("every case has a reference")
+    };
+    let f64_param = |name: &str, units: &str, long: &str, f: &dyn Fn(&Measurement) -> f64| Param {
+        spec: VarSpec::new(name, units, long),
+        values: ParamValues::F64(ms.iter().map(f).collect()),
+    };
+    let mut parameters = vec![
+        f64_param("source_case", "1", "case id in the grid", &|m| {
+            study.cases[m.case].id as f64
+        }),
+        Param {
+            spec: VarSpec::new("method", "1", "integrator: dopri5, sdirk4 or rk4"),
+            values: ParamValues::Str(
+                ms.iter()
+                    .map(|m| describe(&m.method).0.to_string())
+                    .collect(),
+            ),
+        },
+        f64_param(
+            "setting",
+            "1",
+            "relative tolerance (dopri5, sdirk4) or step in s (rk4)",
+            &|m| describe(&m.method).1,
+        ),
+        f64_param(
+            "horizon",
+            "s",
+            "predictability horizon of the case (reference runs at rtol 1e-11 and 1e-12 part)",
+            &|m| reference_of(m).horizon,
+        ),
+    ];
+    for (c, ch) in ERROR_CHANNELS.iter().enumerate() {
+        parameters.push(f64_param(
+            &format!("reference_metric_uncertainty_{ch}"),
+            "1",
+            "relative difference of the metric between the rtol 1e-11 and 1e-12 references",
+            &|m| reference_of(m).metric_uncertainty[c],
+        ));
+    }
+    for p in PARAMETERS {
+        parameters.push(f64_param(
+            p.name,
+            p.dimension.base_unit(),
+            p.long_name,
+            &|m| p.get(case(m)),
+        ));
+    }
+    parameters.push(Param {
+        spec: VarSpec::new("location", "1", "bearing location"),
+        values: ParamValues::Str(
+            ms.iter()
+                .map(|m| case(m).location.name().to_string())
+                .collect(),
+        ),
+    });
+    let mut metrics = Vec::new();
+    for ch in ERROR_CHANNELS {
+        metrics.push(VarSpec::new(
+            format!("max_error_{ch}"),
+            "1",
+            format!(
+                "largest |{ch} - reference| over [0, horizon], relative to the reference's range"
+            ),
+        ));
+        metrics.push(VarSpec::new(
+            format!("rms_error_{ch}"),
+            "1",
+            format!("RMS of {ch} - reference over [0, horizon], relative to the reference's range"),
+        ));
+        metrics.push(VarSpec::new(
+            format!("metric_error_{ch}"),
+            "1",
+            format!("relative error of {ch}_rms_deviation (deviation from the ideal mechanism)"),
+        ));
+    }
+    metrics.extend([
+        VarSpec::new("wall_time", "s", "wall-clock time of the run"),
+        VarSpec::new("steps", "1", "accepted steps"),
+        VarSpec::new("rejected_steps", "1", "rejected steps"),
+        VarSpec::new("rhs_evals", "1", "right-hand-side evaluations"),
+    ]);
+    let mut attributes = provenance();
+    attributes.extend([
+        (
+            "title".to_string(),
+            format!("studyrun accuracy study of {}", study.name).into(),
+        ),
+        ("grid_yaml".to_string(), study.source.clone().into()),
+        (
+            "reference".to_string(),
+            format!("{REFERENCE:?}, validated by {CHECK:?}").into(),
+        ),
+        ("horizon_threshold".to_string(), HORIZON_THRESHOLD.into()),
+        ("transient".to_string(), study.transient.into()),
+    ]);
+    let layout = Layout {
+        case_ids: (0..ms.len() as u64).collect(),
+        times: Vec::new(),
+        frequencies: Vec::new(),
+        reference_ids: vec![0],
+        series: Vec::new(),
+        spectra: Vec::new(),
+        metrics,
+        parameters,
+        reference_parameters: Vec::new(),
+        reference_series: Vec::new(),
+        reference_index: vec![0; ms.len()],
+        attributes,
+        storage: Storage::default(),
+    };
+    let (_, partial) = crate::run::side_paths(path);
+    let mut w = StudyWriter::create(&partial, &layout)?;
+    for (row, m) in ms.iter().enumerate() {
+        let mut values: Vec<f64> = (0..3)
+            .flat_map(|c| [m.max_error[c], m.rms_error[c], m.metric_error[c]])
+            .collect();
+        values.extend([
+            m.wall_time,
+            m.steps as f64,
+            m.rejected as f64,
+            m.rhs_evals as f64,
+        ]);
+        let (status, message) = match &m.error {
+            None => (Status::Ok, ""),
+            Some(e) => (Status::Failed, e.as_str()),
+        };
+        w.write_case(
+            row,
+            &CaseRecord {
+                series: &[],
+                spectra: &[],
+                metrics: &values,
+                status,
+                message,
+            },
+        )?;
+    }
+    w.finish()?;
+    std::fs::rename(&partial, path)?;
+    Ok(())
+}
