@@ -1,0 +1,72 @@
+"""Shared fixtures of the analysis tests.
+
+Environment:
+  STUDYRUN_SMOKE_FILE  the result of `studyrun studies/smoke.yaml` (.ci/run makes it); unset: skip.
+  STUDYRUN_PAPER_FILE  optional, the result of `studyrun studies/paper.yaml`; unset: skip those tests.
+"""
+
+import os
+import sys
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+import matplotlib.image as mpimg  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO))  # `import analysis...` from any working directory
+
+from analysis.studyfile import open_study  # noqa: E402
+
+
+def study_path(variable, how):
+    """The absolute path of the study file named by the environment `variable` (relative
+    to the working directory), or skip saying `how` to make it."""
+    value = os.environ.get(variable)
+    if not value:
+        pytest.skip(f"{variable} is not set: run `{how}` and point it at the file")
+    assert os.path.isfile(value), f"{variable}={value} does not exist"
+    return os.path.abspath(value)
+
+
+@pytest.fixture(scope="session")
+def smoke_path():
+    return study_path("STUDYRUN_SMOKE_FILE", "studyrun studies/smoke.yaml -o smoke.h5")
+
+
+@pytest.fixture(scope="session")
+def paper_path():
+    return study_path("STUDYRUN_PAPER_FILE", "studyrun studies/paper.yaml -o paper.h5")
+
+
+@pytest.fixture(scope="session")
+def smoke(smoke_path):
+    with open_study(smoke_path) as ds:
+        yield ds.load()
+
+
+@pytest.fixture(scope="session")
+def paper(paper_path):
+    with open_study(paper_path) as ds:
+        yield ds
+
+
+def check_png(path, min_kb=15, min_pixels=300):
+    """`path` is a PNG of more than `min_kb` KB that matplotlib reads back as an image at
+    least `min_pixels` wide and high with more than one colour; returns its pixels."""
+    assert path.is_file(), path
+    assert path.stat().st_size > min_kb * 1024, f"{path}: {path.stat().st_size} bytes"
+    image = mpimg.imread(path)
+    assert image.ndim == 3 and image.shape[2] in (3, 4), image.shape
+    assert image.shape[0] >= min_pixels and image.shape[1] >= min_pixels, image.shape
+    assert np.ptp(image[..., :3]) > 0.5, "the image is blank"
+    return image
+
+
+@pytest.fixture
+def assert_png():
+    """The PNG check `check_png`."""
+    return check_png
