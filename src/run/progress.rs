@@ -11,6 +11,8 @@ pub struct Progress {
     bar: Option<ProgressBar>,
     total: u64,
     done: u64,
+    /// Cases done before this run started (resumed from the journal).
+    already: u64,
     failed: u64,
     start: Instant,
     last_log: Instant,
@@ -35,6 +37,7 @@ impl Progress {
             bar,
             total,
             done: already,
+            already,
             failed: 0,
             start: Instant::now(),
             last_log: Instant::now(),
@@ -62,9 +65,11 @@ impl Progress {
 
     fn log(&self) {
         let secs = self.start.elapsed().as_secs_f64();
+        let rate = (self.done - self.already) as f64 / secs.max(1e-9);
+        let eta = (self.total - self.done) as f64 / rate.max(1e-9);
         eprintln!(
-            "studyrun: {}/{} cases, {} failed, {:.1} s elapsed",
-            self.done, self.total, self.failed, secs
+            "studyrun: {}/{} cases, {:.1} cases/s, ETA {:.0} s, {} failed, {:.1} s elapsed",
+            self.done, self.total, rate, eta, self.failed, secs
         );
     }
 
