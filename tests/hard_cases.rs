@@ -228,7 +228,8 @@ fn case04_three_and_forty_balls() {
 /// Case 5: 6000 rpm at both locations: inertia loads of kN (|F| up to 33 kN, |e| up to
 /// 170 µm). Three revolutions, 50 kHz samples, rtol 1e-8 (energy ≤ 1e-6, measured
 /// 3e-8). The large loads keep the journal against the races, so the case is not
-/// chaotic: rtol 1e-10 agrees over the whole run to 1e-4 (measured ≤ 2e-5).
+/// chaotic: rtol 1e-10 agrees over the whole run to 5e-4 (measured 1.0e-5 at
+/// crank_ground, 7.2e-5 at crank_rod, in the crank moment).
 #[test]
 fn case05_6000_rpm_at_both_locations() {
     for location in [Location::CrankGround, Location::CrankRod] {
@@ -237,7 +238,7 @@ fn case05_6000_rpm_at_both_locations() {
         let times = uniform_times(3.0 * revolution(6000.0), 1500);
         let (run, _) = checked(&format!("{name} 1e-8"), &case, &dopri(1e-8), &times, 1e-6);
         let (reference, _) = checked(&format!("{name} 1e-10"), &case, &dopri(1e-10), &times, 1e-8);
-        agree(&name, location, &run, &reference, times.len(), 1e-4);
+        agree(&name, location, &run, &reference, times.len(), 5e-4);
     }
 }
 
