@@ -260,20 +260,23 @@ pub fn run(
     Ok((references, measurements))
 }
 
-/// The cheapest setting (least total wall time over the cases) whose metric error
-/// stays below `bound` on every case whose reference metric is itself known to
-/// better than `bound / 2` (cases beyond that are chaotic within the analysed
-/// window: no setting can be judged on them to `bound`). Returns the setting and
-/// the number of cases that judged it.
+/// The cheapest setting (least total wall time over the judged cases) whose metric
+/// error stays below `bound` on every **non-chaotic** case: one whose two reference
+/// runs never part (horizon = the whole run). On a chaotic case the metric over a
+/// short window is not a reproducible number (MODEL.md §8): any perturbation, a
+/// tolerance change included, moves it by several per cent, so no setting can be
+/// judged on it to `bound`; such cases need statistics over many revolutions.
+/// Returns the setting and the number of cases that judged it.
 pub fn cheapest_within(
     measurements: &[Measurement],
     references: &[CaseReference],
     ladder: &[Method],
     bound: f64,
+    duration: f64,
 ) -> Option<(Method, usize)> {
     let judged: Vec<usize> = references
         .iter()
-        .filter(|r| r.metric_uncertainty.iter().all(|u| *u < bound / 2.0))
+        .filter(|r| r.horizon >= duration)
         .map(|r| r.case)
         .collect();
     ladder
@@ -406,6 +409,7 @@ pub fn write_file(
             format!("{REFERENCE:?}, validated by {CHECK:?}").into(),
         ),
         ("horizon_threshold".to_string(), HORIZON_THRESHOLD.into()),
+        ("duration".to_string(), study.sampling.duration.into()),
         ("transient".to_string(), study.transient.into()),
     ]);
     let layout = Layout {

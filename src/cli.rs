@@ -343,9 +343,23 @@ fn accuracy_command(
             rows.iter().map(|m| m.rhs_evals).sum::<u64>()
         );
     }
-    match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01) {
-        Some((m, judged)) => println!("\ncheapest setting with metric error < 1 % on the {judged} cases whose reference metric is known to 0.5 %: {m:?}"),
-        None => println!("\nno setting keeps the metric error below 1 % on every judged case"),
+    let chaotic: Vec<String> = refs
+        .iter()
+        .filter(|r| r.horizon < study.sampling.duration)
+        .map(|r| study.cases[r.case].id.to_string())
+        .collect();
+    println!(
+        "\nchaotic cases (the two references part before the end; horizon < {} s): {} of {}: {}",
+        study.sampling.duration,
+        chaotic.len(),
+        refs.len(),
+        chaotic.join(", ")
+    );
+    match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01, study.sampling.duration) {
+        Some((m, judged)) => println!(
+            "cheapest setting with metric error < 1 % on the {judged} non-chaotic cases: {m:?}"
+        ),
+        None => println!("no setting keeps the metric error below 1 % on every non-chaotic case"),
     }
     accuracy::write_file(&output, &study, &refs, &ms)?;
     eprintln!("studyrun: wrote {}", output.display());

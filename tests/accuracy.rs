@@ -59,7 +59,8 @@ fn accuracy_study_of_a_non_chaotic_case() {
     assert!(err(0) / err(2) > 1e3);
     assert!(err(3) > err(4), "RK4 error must fall with the step");
     assert!(ms[2].rhs_evals > ms[0].rhs_evals, "tighter costs more");
-    let (best, judged) = cheapest_within(&ms, &refs, &ladder, 0.01).expect("a setting within 1 %");
+    let (best, judged) =
+        cheapest_within(&ms, &refs, &ladder, 0.01, 0.1).expect("a setting within 1 %");
     assert_eq!(judged, 1);
     assert!(ms
         .iter()

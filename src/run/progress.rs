@@ -14,6 +14,7 @@ pub struct Progress {
     /// Cases done before this run started (resumed from the journal).
     already: u64,
     failed: u64,
+    quiet: bool,
     start: Instant,
     last_log: Instant,
 }
@@ -39,6 +40,7 @@ impl Progress {
             done: already,
             already,
             failed: 0,
+            quiet,
             start: Instant::now(),
             last_log: Instant::now(),
         }
@@ -55,7 +57,7 @@ impl Progress {
                     bar.set_message(format!("{} failed", self.failed));
                 }
             }
-            None if self.last_log.elapsed() >= Duration::from_secs(5) => {
+            None if !self.quiet && self.last_log.elapsed() >= Duration::from_secs(5) => {
                 self.last_log = Instant::now();
                 self.log();
             }
@@ -77,7 +79,8 @@ impl Progress {
     pub fn finish(&self) {
         match &self.bar {
             Some(bar) => bar.finish(),
-            None => self.log(),
+            None if !self.quiet => self.log(),
+            None => {}
         }
     }
 }
