@@ -265,11 +265,10 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
         }
     }
 
-    let mut cases = Vec::new();
+    // Each case is a list of assignments (parameter, value, YAML field) over the base:
+    // first the grid (mixed radix over the groups, last group fastest), then `cases:`.
     let count = product.unwrap_or(0);
-    for i in 0..count {
-        let mut params = base.clone();
-        let mut case_prov = prov.clone();
+    let grid_cases = (0..count).map(|i| {
         let mut rest = i;
         let mut picks = vec![0usize; groups.len()];
         for (g, group) in groups.iter().enumerate().rev() {
@@ -277,38 +276,29 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
             picks[g] = (rest % len) as usize;
             rest /= len;
         }
-        for (group, &k) in groups.iter().zip(&picks) {
-            for (name, values, field) in group {
-                ctx.apply(
-                    &mut params,
-                    name,
-                    &values.value[k],
-                    &format!("{field}[{k}]"),
-                    &effects,
-                    &mut case_prov,
-                )?;
-            }
-        }
-        cases.push(finish_case(
-            &ctx,
-            params,
-            &effects,
-            &case_prov,
-            cases.len() as u64,
-        )?);
-    }
-    for (c, explicit) in file.cases.iter().enumerate() {
+        groups
+            .iter()
+            .zip(picks)
+            .flat_map(|(group, k)| {
+                group.iter().map(move |(name, values, field)| {
+                    (name.as_str(), &values.value[k], format!("{field}[{k}]"))
+                })
+            })
+            .collect::<Vec<_>>()
+    });
+    let explicit_cases = file.cases.iter().enumerate().map(|(c, explicit)| {
+        explicit
+            .value
+            .iter()
+            .map(|(name, v)| (name.as_str(), v, format!("cases[{c}].{name}")))
+            .collect::<Vec<_>>()
+    });
+    let mut cases = Vec::new();
+    for assignments in grid_cases.chain(explicit_cases) {
         let mut params = base.clone();
         let mut case_prov = prov.clone();
-        for (name, v) in &explicit.value {
-            ctx.apply(
-                &mut params,
-                name,
-                v,
-                &format!("cases[{c}].{name}"),
-                &effects,
-                &mut case_prov,
-            )?;
+        for (name, value, field) in &assignments {
+            ctx.apply(&mut params, name, value, field, &effects, &mut case_prov)?;
         }
         cases.push(finish_case(
             &ctx,
