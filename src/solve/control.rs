@@ -170,6 +170,28 @@ impl StepController {
     }
 }
 
+/// The step to attempt from `t` given the proposed `h` (s): checks the step budget,
+/// caps `h` at `p.max_step`, stretches a step within 1 % of the end to land exactly
+/// on it (Hairer's 1.01 rule) and refuses a step that underflows — reporting
+/// `model_failure` (the model error that made the last steps fail), if any, rather
+/// than the bare underflow. Returns the step and whether it is the last one.
+pub(crate) fn next_step(
+    t: f64,
+    h: f64,
+    p: &Problem<'_>,
+    stats: &Stats,
+    model_failure: &mut Option<SolveError>,
+) -> Result<(f64, bool), SolveError> {
+    check_budget(t, stats, p.max_steps)?;
+    let mut h = h.min(p.max_step);
+    let last = t + 1.01 * h >= p.t_end;
+    if last {
+        h = p.t_end - t;
+    }
+    check_step_size(t, h).map_err(|e| model_failure.take().unwrap_or(e))?;
+    Ok((h, last))
+}
+
 /// Errs with [`SolveError::StepBudgetExhausted`] once accepted plus rejected steps
 /// reach `max_steps`.
 pub(crate) fn check_budget(t: f64, stats: &Stats, max_steps: u64) -> Result<(), SolveError> {

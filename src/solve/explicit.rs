@@ -1,9 +1,7 @@
 //! One explicit Runge–Kutta engine driven by [`ExplicitTableau`] data, and the two
 //! methods built on it: adaptive Dormand–Prince 5(4) and fixed-step RK4.
 
-use super::control::{
-    check_budget, check_step_size, initial_step, StepController, Tolerance, Verdict, PI_BETA,
-};
+use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, PI_BETA};
 use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
 use super::tableau::{ExplicitTableau, DORMAND_PRINCE, RK4};
@@ -171,14 +169,8 @@ where
     // The last model failure of a rejected step, reported if the step size underflows.
     let mut model_failure: Option<SolveError> = None;
     loop {
-        check_budget(t, &stats, p.max_steps)?;
-        h = h.min(p.max_step);
-        // Stretch the last step rather than leave a sliver (Hairer's 1.01 rule).
-        let last = t + 1.01 * h >= p.t_end;
-        if last {
-            h = p.t_end - t;
-        }
-        check_step_size(t, h).map_err(|e| model_failure.take().unwrap_or(e))?;
+        let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
+        h = h_try;
         let err = match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
             StepOutcome::NonFinite { .. } => f64::NAN,
             StepOutcome::ModelFailed(e) => {

@@ -19,9 +19,7 @@
 //! the step with `max_step` when samples between step ends matter (the error falls
 //! like `max_step²`; Hairer's quartic continuous extension behaves the same way).
 
-use super::control::{
-    check_budget, check_step_size, initial_step, StepController, Tolerance, Verdict, NON_FINITE_CUT,
-};
+use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, NON_FINITE_CUT};
 use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
 use super::tableau::{SdirkTableau, SDIRK4};
@@ -282,13 +280,8 @@ where
     // The last model failure of a rejected step, reported if the step size underflows.
     let mut model_failure: Option<SolveError> = None;
     loop {
-        check_budget(t, &stats, p.max_steps)?;
-        h = h.min(p.max_step);
-        let last = t + 1.01 * h >= p.t_end;
-        if last {
-            h = p.t_end - t;
-        }
-        check_step_size(t, h).map_err(|e| model_failure.take().unwrap_or(e))?;
+        let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
+        h = h_try;
         if need_jac {
             w.jacobian(sys, t, &mut stats)?;
             need_jac = false;
