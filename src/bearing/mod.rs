@@ -7,15 +7,16 @@
 //! its force `F_r = K δ_r^{3/2} + C max(v_r, 0)` (or the two-sided variant). The
 //! housing receives `F = Σ F_r n_r` at its race centre, the journal `−F` at its.
 
+pub mod kernel;
 pub mod stiffness;
 mod waviness;
 
+pub use kernel::{BallSet, BallSum, ContactState};
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
 use crate::error::ParamError;
 use crate::multibody::BodyRef;
 use crate::multibody::{add_point_force, ElementEnergy, ForceElement, Pose};
-use waviness::RaceProfile;
 
 /// How contact damping acts on a loaded ball.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -151,39 +152,67 @@ pub struct BearingReaction {
     pub loaded_balls: usize,
 }
 
-/// The ball bearing as a [`ForceElement`].
+/// The ball bearing as a [`ForceElement`] of the general multibody core: it reads
+/// the race centres and angles from the bodies' poses and hands the state to the
+/// [`BallSet`] kernel.
 #[derive(Debug, Clone)]
 pub struct BallBearing {
     mount: Mounting,
-    stiffness: f64,
-    damping: f64,
-    damping_model: DampingModel,
-    half_clearance: f64,
     /// Cage-angle weights `d_i/(d_i+d_o)` (journal) and `d_o/(d_i+d_o)` (housing).
-    weight_journal: f64,
-    weight_housing: f64,
-    /// Unit vectors of the balls' angles `2π(r−1)/N_b` at zero cage angle.
-    ball_dir: Vec<[f64; 2]>,
-    inner: RaceProfile,
-    outer: RaceProfile,
+    weights: CageWeights,
+    balls: BallSet,
     reaction: BearingReaction,
 }
 
-/// Kinematic quantities of one evaluation shared by all balls.
+/// The cage angle of MODEL.md §2 as weights of the race rotations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CageWeights {
+    /// `d_i/(d_i+d_o)`, the weight of the journal's (inner race's) rotation.
+    pub journal: f64,
+    /// `d_o/(d_i+d_o)`, the weight of the housing's (outer race's) rotation.
+    pub housing: f64,
+}
+
+impl CageWeights {
+    /// The weights of `params`' raceway diameters.
+    pub fn of(params: &BearingParams) -> Self {
+        let (di, dd) = (params.inner_race_diameter, params.outer_race_diameter);
+        Self {
+            journal: di / (di + dd),
+            housing: dd / (di + dd),
+        }
+    }
+
+    /// The kernel state for eccentricity `e` (m), its rate `v` (m/s), and the
+    /// journal's and housing's rotations since `t = 0` (rad).
+    pub fn contact_state(
+        self,
+        e: [f64; 2],
+        v: [f64; 2],
+        journal_turn: f64,
+        housing_turn: f64,
+    ) -> ContactState {
+        let cage = self.journal * journal_turn + self.housing * housing_turn;
+        ContactState {
+            e,
+            v,
+            cage,
+            psi_in: cage - journal_turn,
+            psi_out: cage - housing_turn,
+        }
+    }
+}
+
+/// Kinematic quantities of one evaluation.
 struct Kinematics {
     pose_h: Pose,
     pose_j: Pose,
     p_h: [f64; 2],
     p_j: [f64; 2],
-    e: [f64; 2],
-    v: [f64; 2],
-    /// Cage rotation (cos, sin) of `φ_c`.
-    cage: [f64; 2],
+    state: ContactState,
+    /// Rates of `φ_c`, `ψ_in`, `ψ_out` (rad/s).
     cage_rate: f64,
-    /// `φ_c − Δθ_j` and `φ_c − Δθ_h` with their rates (rad, rad/s).
-    psi_in: f64,
     psi_in_rate: f64,
-    psi_out: f64,
     psi_out_rate: f64,
 }
 
@@ -191,22 +220,10 @@ impl BallBearing {
     /// A bearing with `params` (validated here) at `mount`.
     pub fn new(params: &BearingParams, mount: Mounting) -> Result<Self, ParamError> {
         params.validate()?;
-        let n = params.ball_count;
-        let angles: Vec<f64> = (0..n)
-            .map(|r| std::f64::consts::TAU * r as f64 / n as f64)
-            .collect();
-        let (di, dd) = (params.inner_race_diameter, params.outer_race_diameter);
         Ok(Self {
             mount,
-            stiffness: params.stiffness,
-            damping: params.damping,
-            damping_model: params.damping_model,
-            half_clearance: 0.5 * params.clearance,
-            weight_journal: di / (di + dd),
-            weight_housing: dd / (di + dd),
-            ball_dir: angles.iter().map(|a| [a.cos(), a.sin()]).collect(),
-            inner: RaceProfile::new(&params.inner_waviness, &angles),
-            outer: RaceProfile::new(&params.outer_waviness, &angles),
+            weights: CageWeights::of(params),
+            balls: BallSet::new(params),
             reaction: BearingReaction::default(),
         })
     }
@@ -218,8 +235,8 @@ impl BallBearing {
 
     /// The cage angle `φ_c` (rad) for housing and journal angles (rad).
     pub fn cage_angle(&self, housing_theta: f64, journal_theta: f64) -> f64 {
-        self.weight_journal * (journal_theta - self.mount.journal_theta0)
-            + self.weight_housing * (housing_theta - self.mount.housing_theta0)
+        self.weights.journal * (journal_theta - self.mount.journal_theta0)
+            + self.weights.housing * (housing_theta - self.mount.housing_theta0)
     }
 
     fn kinematics(&self, q: &[f64], qd: &[f64]) -> Kinematics {
@@ -231,17 +248,17 @@ impl BallBearing {
             pose_h.point_velocity(m.housing_point),
             pose_j.point_velocity(m.journal_point),
         );
-        let phi_c = self.cage_angle(pose_h.theta, pose_j.theta);
-        let cage_rate = self.weight_journal * pose_j.omega + self.weight_housing * pose_h.omega;
-        let (s, c) = phi_c.sin_cos();
+        let state = self.weights.contact_state(
+            [p_j[0] - p_h[0], p_j[1] - p_h[1]],
+            [v_j[0] - v_h[0], v_j[1] - v_h[1]],
+            pose_j.theta - m.journal_theta0,
+            pose_h.theta - m.housing_theta0,
+        );
+        let cage_rate = self.weights.journal * pose_j.omega + self.weights.housing * pose_h.omega;
         Kinematics {
-            e: [p_j[0] - p_h[0], p_j[1] - p_h[1]],
-            v: [v_j[0] - v_h[0], v_j[1] - v_h[1]],
-            cage: [c, s],
+            state,
             cage_rate,
-            psi_in: phi_c - (pose_j.theta - m.journal_theta0),
             psi_in_rate: cage_rate - pose_j.omega,
-            psi_out: phi_c - (pose_h.theta - m.housing_theta0),
             psi_out_rate: cage_rate - pose_h.omega,
             pose_h,
             pose_j,
@@ -249,80 +266,41 @@ impl BallBearing {
             p_j,
         }
     }
-
-    /// Unit vector `n_r` of ball `r` for the cage rotation `cage = (cos φ_c, sin φ_c)`.
-    fn ball_normal(&self, r: usize, cage: [f64; 2]) -> [f64; 2] {
-        let d = self.ball_dir[r];
-        [
-            cage[0] * d[0] - cage[1] * d[1],
-            cage[1] * d[0] + cage[0] * d[1],
-        ]
-    }
-
-    /// Force magnitude of a loaded ball with deflection `delta` > 0 (m) and
-    /// approach speed `v_r` (m/s), and its elastic part (N).
-    fn ball_force(&self, delta: f64, v_r: f64) -> (f64, f64) {
-        let elastic = self.stiffness * delta * delta.sqrt();
-        let total = match self.damping_model {
-            DampingModel::CompressionOnly => elastic + self.damping * v_r.max(0.0),
-            DampingModel::TwoSided => (elastic + self.damping * v_r).max(0.0),
-        };
-        (total, elastic)
-    }
 }
 
 impl ForceElement for BallBearing {
     fn add_forces(&mut self, _t: f64, q: &[f64], qd: &[f64], forces: &mut [f64]) {
         let k = self.kinematics(q, qd);
-        let inner = self.inner.at(k.psi_in);
-        let outer = self.outer.at(k.psi_out);
-        let mut f = [0.0; 2];
-        let mut loaded = 0;
-        for r in 0..self.ball_dir.len() {
-            let n = self.ball_normal(r, k.cage);
-            let delta = k.e[0] * n[0] + k.e[1] * n[1] - self.half_clearance
-                + self.inner.height(r, &inner)
-                + self.outer.height(r, &outer);
-            if delta > 0.0 {
-                let (fr, _) = self.ball_force(delta, k.v[0] * n[0] + k.v[1] * n[1]);
-                f[0] += fr * n[0];
-                f[1] += fr * n[1];
-                loaded += 1;
-            }
-        }
-        let m = self.mount;
+        let sum = self.balls.force(&k.state);
+        let (m, f) = (self.mount, sum.force);
         add_point_force(forces, m.housing, &k.pose_h, k.p_h, f);
         add_point_force(forces, m.journal, &k.pose_j, k.p_j, [-f[0], -f[1]]);
         self.reaction = BearingReaction {
             force: f,
-            eccentricity: k.e,
-            loaded_balls: loaded,
+            eccentricity: k.state.e,
+            loaded_balls: sum.loaded,
         };
     }
 
     /// `V = Σ 0.4 K δ_r^{5/2}`; `∂V/∂t = Σ K δ_r^{3/2} ∂δ_r/∂t` at fixed race
     /// centres (through the cage and race rotations); dissipation
-    /// `Σ (F_r − K δ_r^{3/2}) v_r` over loaded balls.
+    /// `Σ (F_r − K δ_r^{3/2}) v_r` over loaded balls. Ball by ball, from the
+    /// kernel's scalar twin.
     fn energy(&self, _t: f64, q: &[f64], qd: &[f64]) -> ElementEnergy {
         let k = self.kinematics(q, qd);
-        let inner = self.inner.at(k.psi_in);
-        let outer = self.outer.at(k.psi_out);
+        let e = k.state.e;
         let mut out = ElementEnergy::default();
-        for r in 0..self.ball_dir.len() {
-            let n = self.ball_normal(r, k.cage);
-            let delta = k.e[0] * n[0] + k.e[1] * n[1] - self.half_clearance
-                + self.inner.height(r, &inner)
-                + self.outer.height(r, &outer);
-            if delta > 0.0 {
-                let v_r = k.v[0] * n[0] + k.v[1] * n[1];
-                let (fr, elastic) = self.ball_force(delta, v_r);
+        for r in 0..self.balls.len() {
+            let b = self.balls.ball(r, &k.state);
+            if b.delta > 0.0 {
+                let n = b.normal;
                 // dn_r/dt at fixed e: φ̇_c n_r⊥.
-                let delta_rate = k.cage_rate * (-k.e[0] * n[1] + k.e[1] * n[0])
-                    + self.inner.slope(r, &inner) * k.psi_in_rate
-                    + self.outer.slope(r, &outer) * k.psi_out_rate;
-                out.potential += 0.4 * elastic * delta;
-                out.potential_rate += elastic * delta_rate;
-                out.dissipation += (fr - elastic) * v_r;
+                let delta_rate = k.cage_rate * (-e[0] * n[1] + e[1] * n[0])
+                    + b.slope_in * k.psi_in_rate
+                    + b.slope_out * k.psi_out_rate;
+                out.potential += 0.4 * b.elastic * b.delta;
+                out.potential_rate += b.elastic * delta_rate;
+                out.dissipation += (b.force - b.elastic) * b.approach;
             }
         }
         out

@@ -1,0 +1,286 @@
+//! The slider-crank of MODEL.md §1 in minimal coordinates: the production model.
+//!
+//! With the crank driven at `θ2 = ω t` and the slider on the x axis, a bearing case
+//! has two degrees of freedom, the bearing eccentricity `e = (ex, ey)`, and the
+//! state is `y = (ex, ey, ėx, ėy)`. Everything else follows in closed form:
+//!
+//! - rod big end `A = e + L2 u` with `u = (cos ω t, sin ω t)` (crank_ground: the
+//!   crank pivot sits at `e`; crank_rod: the big end sits `e` from the crank pin);
+//! - rod angle from `A_y + L3 sin θ3 = 0`, `cos θ3 = +√(1 − sin²θ3)` (slider to the
+//!   right of the big end, the branch of the initial configuration);
+//! - rod centre `A + (L3/2)(cos θ3, sin θ3)`, slider `x4 = A_x + L3 cos θ3`;
+//! - crank centre `c_g e + (L2/2) u`, with `c_g = 1` at crank_ground and 0 at crank_rod.
+//!
+//! Every acceleration is affine in `ë`, so d'Alembert's principle over `δe` gives a
+//! 2×2 system `M̄(θ3) ë = Q − Σ Jᵀ m a₀`, solved by Cramer's rule. The outputs come
+//! from the same principle: the driver torque from a virtual `δθ2` at fixed `e`, the
+//! force on the rod from the crank from the rod-and-slider's x balance and the rod's
+//! moment balance about the slider pin, the ground reaction from the crank's balance.
+//!
+//! Constraints hold exactly by construction (no drift, no Newton iteration). The
+//! general Cartesian model ([`super::SliderCrank`]) is kept as the reference: the
+//! parity tests compare the two. The ideal mechanism has no state at all and is
+//! sampled in closed form.
+
+use crate::bearing::{BallSet, BallSum, CageWeights};
+use crate::error::{ModelError, ParamError};
+use crate::solve::OdeSystem;
+
+use super::{CaseParams, Location, Sample, GRAVITY};
+
+/// Mechanism constants of the reduced equations (SI).
+#[derive(Debug, Clone, Copy)]
+struct Constants {
+    l2: f64,
+    l3: f64,
+    m2: f64,
+    m3: f64,
+    j3: f64,
+    m4: f64,
+    omega: f64,
+    /// `c_g`: 1 when the crank translates with `e` (crank_ground), else 0.
+    crank_moves: f64,
+    /// Gravity (m/s²) along −y, 0 when off.
+    g: f64,
+}
+
+impl Constants {
+    /// Kinematics at time `t` (s), eccentricity `e` (m) and its rate `ed` (m/s).
+    fn kinematics(&self, t: f64, e: [f64; 2], ed: [f64; 2]) -> Result<Kinematics, ModelError> {
+        let k = self;
+        let (uy, ux) = (k.omega * t).sin_cos();
+        let w2 = k.omega * k.omega;
+        let s = -(e[1] + k.l2 * uy) / k.l3;
+        let c2 = 1.0 - s * s;
+        if c2.is_nan() {
+            return Err(ModelError::NonFinite {
+                what: "eccentricity",
+            });
+        }
+        if c2 <= 1e-12 {
+            return Err(ModelError::SingularConstraints);
+        }
+        let c = c2.sqrt();
+        let k_theta = -1.0 / (k.l3 * c);
+        // θ̇3 = ∂θ3/∂A_y Ȧ_y; θ̈3 = k_θ (Ä_y − L3 s θ̇3²) with Ä = ë − L2 ω² u.
+        let theta_d = k_theta * (ed[1] + k.l2 * k.omega * ux);
+        let whirl = k.l3 * theta_d * theta_d;
+        let theta_dd0 = k_theta * (-k.l2 * w2 * uy - s * whirl);
+        // Along the rod: −L3 (s θ̈3 + c θ̇3²) at ë = 0.
+        let along = -(s * k.l3 * theta_dd0 + c * whirl);
+        let big_end_x = -k.l2 * w2 * ux;
+        Ok(Kinematics {
+            u: [ux, uy],
+            s,
+            c,
+            tan: s / c,
+            k_theta,
+            theta_dd0,
+            rod_dd0: [big_end_x + 0.5 * along, -0.5 * k.l2 * w2 * uy],
+            slider_dd0: big_end_x + along,
+            crank_dd0: [-0.5 * k.l2 * w2 * ux, -0.5 * k.l2 * w2 * uy],
+        })
+    }
+
+    /// `ë` (m/s²) from the reduced equations for bearing force `f` on the housing (N).
+    fn eccentricity_acceleration(&self, kin: &Kinematics, f: [f64; 2]) -> [f64; 2] {
+        let k = self;
+        let (t, cg) = (kin.tan, k.crank_moves);
+        let m11 = k.m2 * cg + k.m3 + k.m4;
+        let m12 = (0.5 * k.m3 + k.m4) * t;
+        let m22 = k.m2 * cg
+            + k.j3 * kin.k_theta * kin.k_theta
+            + 0.25 * k.m3 * (t * t + 1.0)
+            + k.m4 * t * t;
+        // The journal receives −F; gravity's generalised force is constant.
+        let bx =
+            -f[0] - k.m2 * cg * kin.crank_dd0[0] - k.m3 * kin.rod_dd0[0] - k.m4 * kin.slider_dd0;
+        let by = -f[1]
+            - k.g * (k.m2 * cg + 0.5 * k.m3)
+            - k.m2 * cg * kin.crank_dd0[1]
+            - k.j3 * kin.k_theta * kin.theta_dd0
+            - k.m3 * (0.5 * t * kin.rod_dd0[0] + 0.5 * kin.rod_dd0[1])
+            - k.m4 * t * kin.slider_dd0;
+        let det = m11 * m22 - m12 * m12;
+        [(m22 * bx - m12 * by) / det, (m11 * by - m12 * bx) / det]
+    }
+}
+
+/// The bearing at its location.
+#[derive(Debug, Clone)]
+struct Bearing {
+    weights: CageWeights,
+    balls: BallSet,
+}
+
+/// Kinematics at one `(t, e, ė)`, with every acceleration split as `J ë + a₀`.
+#[derive(Debug, Clone, Copy)]
+struct Kinematics {
+    /// `(cos ω t, sin ω t)`.
+    u: [f64; 2],
+    /// `sin θ3`, `cos θ3`, `tan θ3`.
+    s: f64,
+    c: f64,
+    tan: f64,
+    /// `∂θ3/∂A_y = −1/(L3 cos θ3)` (rad/m).
+    k_theta: f64,
+    /// `θ̈3` at `ë = 0` (rad/s²).
+    theta_dd0: f64,
+    /// Rod centre, slider and crank centre accelerations at `ë = 0` (m/s²).
+    rod_dd0: [f64; 2],
+    slider_dd0: f64,
+    crank_dd0: [f64; 2],
+}
+
+/// The slider-crank case in minimal coordinates; implements [`OdeSystem`] for the
+/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s) and has no state for
+/// [`Location::Ideal`].
+#[derive(Debug, Clone)]
+pub struct MinimalSliderCrank {
+    location: Location,
+    k: Constants,
+    bearing: Option<Bearing>,
+}
+
+impl MinimalSliderCrank {
+    /// Builds the case; refuses invalid parameters with the field named.
+    pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
+        case.validate()?;
+        let mp = &case.mechanism;
+        let bearing = (case.location != Location::Ideal).then(|| Bearing {
+            weights: CageWeights::of(&case.bearing),
+            balls: BallSet::new(&case.bearing),
+        });
+        Ok(Self {
+            location: case.location,
+            k: Constants {
+                l2: mp.crank_length,
+                l3: mp.rod_length,
+                m2: mp.crank_mass,
+                m3: mp.rod_mass,
+                j3: mp.rod_inertia,
+                m4: mp.slider_mass,
+                omega: case.omega(),
+                crank_moves: if case.location == Location::CrankGround {
+                    1.0
+                } else {
+                    0.0
+                },
+                g: if case.gravity { GRAVITY } else { 0.0 },
+            },
+            bearing,
+        })
+    }
+
+    /// Where the bearing sits.
+    pub fn location(&self) -> Location {
+        self.location
+    }
+
+    /// The initial state: centred journal at rest relative to the housing (paper
+    /// Table 3), `(0, 0, 0, 0)`; empty for the ideal mechanism.
+    pub fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; self.dim()]
+    }
+
+    /// Kinematics, bearing force and `ë` at `(t, y)`; no force and `ë = 0` for
+    /// the ideal mechanism.
+    fn solve(&mut self, t: f64, y: &[f64]) -> Result<(Kinematics, BallSum, [f64; 2]), ModelError> {
+        let k = &self.k;
+        let Some(w) = self.bearing.as_mut() else {
+            return Ok((
+                k.kinematics(t, [0.0; 2], [0.0; 2])?,
+                BallSum::default(),
+                [0.0; 2],
+            ));
+        };
+        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let kin = k.kinematics(t, e, ed)?;
+        let crank_turn = k.omega * t;
+        let (journal_turn, housing_turn) = match self.location {
+            Location::CrankRod => (kin.s.atan2(kin.c), crank_turn),
+            _ => (crank_turn, 0.0),
+        };
+        let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
+        let sum = w.balls.force(&state);
+        Ok((kin, sum, k.eccentricity_acceleration(&kin, sum.force)))
+    }
+
+    /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
+        let (kin, sum, edd) = self.solve(t, y)?;
+        let k = self.k;
+        let (u, tan, cg) = (kin.u, kin.tan, k.crank_moves);
+        let theta_dd = kin.k_theta * edd[1] + kin.theta_dd0;
+        let rod_dd = [
+            edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
+            0.5 * edd[1] + kin.rod_dd0[1],
+        ];
+        let slider_dd = edd[0] + tan * edd[1] + kin.slider_dd0;
+        let crank_dd = [
+            cg * edd[0] + kin.crank_dd0[0],
+            cg * edd[1] + kin.crank_dd0[1],
+        ];
+
+        // Driver torque: d'Alembert over a virtual δθ2 at fixed e, under which the
+        // big end moves by L2 u⊥ δθ2 and the bearing force does no work.
+        let da = [-k.l2 * u[1], k.l2 * u[0]];
+        let crank_moment = k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
+            + k.j3 * theta_dd * kin.k_theta * da[1]
+            + k.m3 * (rod_dd[0] * (da[0] + 0.5 * tan * da[1]) + (rod_dd[1] + k.g) * 0.5 * da[1])
+            + k.m4 * slider_dd * (da[0] + tan * da[1]);
+
+        // Force R on the rod from the crank: the rod and slider's x balance, and the
+        // rod's moment balance about the slider pin B (the slider's force has no arm).
+        let rx = k.m3 * rod_dd[0] + k.m4 * slider_dd;
+        let p = [-0.5 * k.l3 * kin.c, -0.5 * k.l3 * kin.s]; // rod centre − B
+        let d = [-k.l3 * kin.c, -k.l3 * kin.s]; // A − B
+        let inertial = k.j3 * theta_dd + k.m3 * (p[0] * rod_dd[1] - p[1] * rod_dd[0]);
+        let weight = -p[0] * k.m3 * k.g; // (r3 − B) × (0, −m3 g)
+        let ry = (inertial - weight + d[1] * rx) / d[0];
+
+        let f = sum.force;
+        let on_crank_from_rod = match self.location {
+            Location::CrankRod => f,
+            _ => [-rx, -ry],
+        };
+        let on_ground_from_crank = match self.location {
+            Location::CrankGround => f,
+            _ => [
+                on_crank_from_rod[0] - k.m2 * crank_dd[0],
+                on_crank_from_rod[1] - k.m2 * (crank_dd[1] + k.g),
+            ],
+        };
+        Ok(Sample {
+            slider_acceleration: slider_dd,
+            crank_moment,
+            crank_ground_force: on_ground_from_crank,
+            crank_rod_force: on_crank_from_rod,
+            eccentricity: if self.bearing.is_some() {
+                [y[0], y[1]]
+            } else {
+                [0.0; 2]
+            },
+            loaded_balls: sum.loaded,
+        })
+    }
+}
+
+impl OdeSystem for MinimalSliderCrank {
+    fn dim(&self) -> usize {
+        if self.bearing.is_some() {
+            4
+        } else {
+            0
+        }
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+        if self.bearing.is_none() {
+            return Ok(());
+        }
+        let (_, _, edd) = self.solve(t, y)?;
+        dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+        Ok(())
+    }
+}
