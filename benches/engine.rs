@@ -1,97 +1,192 @@
-//! Criterion benchmarks of the engine's hot paths: the ball-force kernel, the
-//! right-hand side per bearing location, and one whole paper case.
+//! Criterion benchmarks of the engine's hot paths:
+//!
+//! - `kernel/...`: the SoA ball-force kernel per ball count and scene, and its
+//!   scalar twin (one ball at a time) for the SIMD gain;
+//! - `rhs/...`: one right-hand side of the minimal-coordinate model per location and
+//!   per effect (what each effect costs), and of the general Cartesian core for the
+//!   gain of the specialisation;
+//! - `sample/...`: one output sample (all of MODEL.md §3);
+//! - `case/...`: one whole paper case, and the ideal mechanism.
 //!
 //! Run: `cargo bench --bench engine`. Figures are kept in README.md ("Current figures").
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, Criterion};
-use studyrun::bearing::{BallBearing, BearingParams, Mounting, RaceWaviness};
-use studyrun::mechanism::{CaseParams, Location, SliderCrank};
-use studyrun::multibody::{BodyRef, ForceElement};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use studyrun::bearing::{BallSet, BearingParams, CageWeights, DampingModel, RaceWaviness};
+use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, SliderCrank};
 use studyrun::simulate::{simulate, Sampling};
-use studyrun::solve::{Method, OdeSystem, SolverSettings};
+use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
-fn paper_case(location: Location) -> CaseParams {
-    let mut c = CaseParams {
-        location,
-        ..CaseParams::default()
+/// A scene: which effects are on.
+#[derive(Clone, Copy)]
+struct Scene {
+    name: &'static str,
+    damping: bool,
+    waviness: bool,
+    gravity: bool,
+}
+
+const SCENES: [Scene; 5] = [
+    Scene {
+        name: "contact_only",
+        damping: false,
+        waviness: false,
+        gravity: false,
+    },
+    Scene {
+        name: "damping",
+        damping: true,
+        waviness: false,
+        gravity: false,
+    },
+    Scene {
+        name: "waviness",
+        damping: false,
+        waviness: true,
+        gravity: false,
+    },
+    Scene {
+        name: "gravity",
+        damping: false,
+        waviness: false,
+        gravity: true,
+    },
+    Scene {
+        name: "all",
+        damping: true,
+        waviness: true,
+        gravity: true,
+    },
+];
+
+fn bearing(balls: usize, scene: Scene) -> BearingParams {
+    let mut p = BearingParams {
+        ball_count: balls,
+        damping: if scene.damping { 300.0 } else { 0.0 },
+        damping_model: DampingModel::CompressionOnly,
+        ..BearingParams::default()
     };
-    c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
-    c.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
-    c
-}
-
-/// The bearing force element alone, journal pressed 25 µm into a 40 µm clearance.
-fn kernel(c: &mut Criterion) {
-    for balls in [9usize, 40] {
-        let mut params = BearingParams {
-            ball_count: balls,
-            ..BearingParams::default()
-        };
-        params.inner_waviness = RaceWaviness::single(35, 4e-6);
-        params.outer_waviness = RaceWaviness::single(35, 4e-6);
-        let mount = Mounting {
-            housing: BodyRef::Ground,
-            housing_point: [0.0; 2],
-            journal: BodyRef::Moving(0),
-            journal_point: [0.0; 2],
-            housing_theta0: 0.0,
-            journal_theta0: 0.0,
-        };
-        let mut b = BallBearing::new(&params, mount).unwrap();
-        let (q, qd) = ([25e-6, 3e-6, 0.7], [0.01, -0.02, 31.4]);
-        let mut forces = [0.0; 3];
-        c.bench_function(&format!("bearing_forces/{balls}_balls"), |bench| {
-            bench.iter(|| {
-                b.add_forces(0.0, black_box(&q), black_box(&qd), &mut forces);
-                black_box(forces)
-            })
-        });
+    if scene.waviness {
+        p.inner_waviness = RaceWaviness::single(35, 4e-6);
+        p.outer_waviness = RaceWaviness::single(35, 4e-6);
     }
+    p
 }
 
-/// One right-hand-side evaluation of the mechanism, at the state reached after 50 ms.
-fn rhs(c: &mut Criterion) {
-    for location in [Location::CrankGround, Location::CrankRod] {
-        let case = paper_case(location);
-        let sampling = Sampling {
-            duration: 0.05,
-            sample_rate: 1000.0,
-        };
-        let settings = SolverSettings::new(Method::DormandPrince {
-            rtol: 1e-8,
-            atol: 1e-12,
-        });
-        let mut mech = SliderCrank::new(&case).unwrap();
-        let y0 = mech.initial_state();
-        let mut y_end = y0.clone();
-        studyrun::solve::integrate(
-            &mut mech,
-            &settings,
-            0.0,
-            &y0,
-            &sampling.times(),
-            |_, _, y| {
-                y_end.copy_from_slice(y);
-                Ok(())
-            },
-        )
-        .unwrap();
-        let mut dydt = vec![0.0; y_end.len()];
-        c.bench_function(&format!("rhs/{location}"), |bench| {
-            bench.iter(|| {
-                mech.rhs(0.05, black_box(&y_end), &mut dydt).unwrap();
-                black_box(dydt[0])
-            })
-        });
+fn case(location: Location, scene: Scene) -> CaseParams {
+    CaseParams {
+        location,
+        bearing: bearing(9, scene),
+        gravity: scene.gravity,
+        ..CaseParams::default()
     }
 }
 
 /// The paper case of the throughput target: crank_ground, 300 rpm, 9 balls,
-/// waviness 35 / 4 µm, 0.4 s, 20 001 samples, DOPRI5 at rtol 1e-8.
+/// waviness 35 / 4 µm on both races, damping 300 N s/m.
+fn paper_case(location: Location) -> CaseParams {
+    let mut c = case(location, SCENES[4]);
+    c.gravity = false;
+    c
+}
+
+/// The kernel alone, journal pressed 25 µm into a 40 µm clearance (about a third
+/// of the balls loaded), per ball count, for the contact-only and the full scene.
+fn kernel(c: &mut Criterion) {
+    let mut group = c.benchmark_group("kernel");
+    for scene in [SCENES[0], SCENES[4]] {
+        for balls in [8usize, 9, 16, 32, 64] {
+            let params = bearing(balls, scene);
+            let mut set = BallSet::new(&params);
+            let state =
+                CageWeights::of(&params).contact_state([25e-6, 3e-6], [0.01, -0.02], 0.7, 0.0);
+            group.throughput(Throughput::Elements(balls as u64));
+            group.bench_with_input(BenchmarkId::new(scene.name, balls), &balls, |b, _| {
+                b.iter(|| black_box(set.force(black_box(&state))))
+            });
+            if balls == 9 || balls == 64 {
+                let twin = |s: &BallSet| {
+                    (0..balls).fold([0.0; 2], |f, r| {
+                        let ball = s.ball(r, black_box(&state));
+                        [
+                            f[0] + ball.force * ball.normal[0],
+                            f[1] + ball.force * ball.normal[1],
+                        ]
+                    })
+                };
+                group.bench_with_input(
+                    BenchmarkId::new(format!("{}_scalar_twin", scene.name), balls),
+                    &balls,
+                    |b, _| b.iter(|| black_box(twin(&set))),
+                );
+            }
+        }
+    }
+    group.finish();
+}
+
+/// The state of `sys` after 50 ms of the case (a loaded bearing).
+fn state_at_50ms<S: OdeSystem>(sys: &mut S, y0: &[f64]) -> Vec<f64> {
+    let settings = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-8,
+        atol: 1e-12,
+    });
+    let mut y_end = y0.to_vec();
+    integrate(sys, &settings, 0.0, y0, &[0.05], |_, _, y| {
+        y_end.copy_from_slice(y);
+        Ok(())
+    })
+    .unwrap();
+    y_end
+}
+
+/// One right-hand side: minimal coordinates per location and scene, and the general
+/// Cartesian core on the paper case.
+fn rhs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("rhs");
+    for location in [Location::CrankGround, Location::CrankRod] {
+        for scene in SCENES {
+            let mut mech = MinimalSliderCrank::new(&case(location, scene)).unwrap();
+            let y0 = mech.initial_state();
+            let y = state_at_50ms(&mut mech, &y0);
+            let mut dydt = vec![0.0; y.len()];
+            group.bench_function(format!("minimal/{location}/{}", scene.name), |b| {
+                b.iter(|| {
+                    mech.rhs(0.05, black_box(&y), &mut dydt).unwrap();
+                    black_box(dydt[3])
+                })
+            });
+        }
+        let mut mech = SliderCrank::new(&paper_case(location)).unwrap();
+        let y0 = mech.initial_state();
+        let y = state_at_50ms(&mut mech, &y0);
+        let mut dydt = vec![0.0; y.len()];
+        group.bench_function(format!("general/{location}/paper"), |b| {
+            b.iter(|| {
+                mech.rhs(0.05, black_box(&y), &mut dydt).unwrap();
+                black_box(dydt[3])
+            })
+        });
+    }
+    group.finish();
+}
+
+/// One output sample of the paper case per location.
+fn sample(c: &mut Criterion) {
+    for location in [Location::CrankGround, Location::CrankRod] {
+        let mut mech = MinimalSliderCrank::new(&paper_case(location)).unwrap();
+        let y0 = mech.initial_state();
+        let y = state_at_50ms(&mut mech, &y0);
+        c.bench_function(&format!("sample/{location}"), |b| {
+            b.iter(|| black_box(mech.sample(0.05, black_box(&y)).unwrap()))
+        });
+    }
+}
+
+/// Whole cases: the paper case (0.4 s, 20 001 samples) at the default tolerance,
+/// and the ideal mechanism (closed form, no integrator).
 fn whole_case(c: &mut Criterion) {
-    let case = paper_case(Location::CrankGround);
     let sampling = Sampling {
         duration: 0.4,
         sample_rate: 50_000.0,
@@ -102,11 +197,19 @@ fn whole_case(c: &mut Criterion) {
     });
     let mut group = c.benchmark_group("case");
     group.sample_size(10);
-    group.bench_function("paper_crank_ground_300rpm_9balls", |bench| {
-        bench.iter(|| simulate(black_box(&case), &settings, &sampling).unwrap())
+    let paper = paper_case(Location::CrankGround);
+    group.bench_function("paper_crank_ground_300rpm_9balls", |b| {
+        b.iter(|| simulate(black_box(&paper), &settings, &sampling).unwrap())
+    });
+    let ideal = CaseParams {
+        location: Location::Ideal,
+        ..CaseParams::default()
+    };
+    group.bench_function("ideal_300rpm", |b| {
+        b.iter(|| simulate(black_box(&ideal), &settings, &sampling).unwrap())
     });
     group.finish();
 }
 
-criterion_group!(benches, kernel, rhs, whole_case);
+criterion_group!(benches, kernel, rhs, sample, whole_case);
 criterion_main!(benches);

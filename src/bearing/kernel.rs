@@ -7,9 +7,11 @@
 //! - One `sin_cos` per evaluation for the cage angle (each ball's normal is its base
 //!   direction rotated by it) and one per waviness harmonic (each ball's height is a
 //!   precomputed rotation of that harmonic's phase).
-//! - Branch-free over the balls: contact is a mask (`δ > 0` as 0/1), never an `if`;
-//!   the loop runs over fixed-width lane chunks with per-lane accumulators so the
-//!   compiler emits packed SIMD (SSE2 on baseline x86-64).
+//! - Branch-free over the balls: contact is a mask (`δ > 0`), never an `if`. The
+//!   loop runs over [`LANES`]-wide vectors of the `wide` crate (portable SIMD on
+//!   stable Rust: packed SSE2 on baseline x86-64, AVX when a build enables it; the
+//!   same IEEE operations in the same order either way, no fused multiply-add), so
+//!   results do not depend on the machine that built the binary.
 //! - The damping law is a type parameter ([`Undamped`], [`CompressionOnly`],
 //!   [`TwoSided`]): the law is chosen once per evaluation outside the ball loop, and
 //!   a case without damping or waviness runs code that has none.
@@ -17,6 +19,8 @@
 //! [`BallSet::ball`] is the kernel's scalar twin: one ball at a time, with every
 //! waviness height from its own `sin`, as a reference for parity tests and for the
 //! energy terms.
+
+use wide::f64x4;
 
 use super::{BearingParams, DampingModel, RaceWaviness};
 
@@ -66,12 +70,12 @@ pub struct Ball {
     pub slope_out: f64,
 }
 
-/// A damping law of loaded balls: the ball force from its elastic part, approach
-/// speed and load mask, without branching.
+/// A damping law of loaded balls: the ball forces of [`LANES`] balls from their
+/// elastic parts, approach speeds and load mask, without branching.
 pub trait DampingLaw: Copy {
-    /// Ball force (N) from `elastic = K δ₊^{3/2}` (N), approach speed `v_r` (m/s) and
-    /// `loaded` (1.0 when `δ > 0`, else 0.0).
-    fn force(self, elastic: f64, v_r: f64, loaded: f64) -> f64;
+    /// Ball forces (N) from `elastic = K δ₊^{3/2}` (N), approach speeds `v_r` (m/s)
+    /// and `loaded` (all bits set where `δ > 0`, else 0).
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4;
 }
 
 /// No damping (`C = 0`): `F_r = K δ₊^{3/2}`.
@@ -94,32 +98,22 @@ pub struct TwoSided(
 
 impl DampingLaw for Undamped {
     #[inline(always)]
-    fn force(self, elastic: f64, _v_r: f64, _loaded: f64) -> f64 {
+    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4) -> f64x4 {
         elastic
     }
 }
 
 impl DampingLaw for CompressionOnly {
     #[inline(always)]
-    fn force(self, elastic: f64, v_r: f64, loaded: f64) -> f64 {
-        elastic + self.0 * positive_part(v_r) * loaded
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4 {
+        elastic + ((f64x4::splat(self.0) * v_r.fast_max(f64x4::ZERO)) & loaded)
     }
 }
 
 impl DampingLaw for TwoSided {
     #[inline(always)]
-    fn force(self, elastic: f64, v_r: f64, loaded: f64) -> f64 {
-        positive_part(elastic + self.0 * v_r) * loaded
-    }
-}
-
-/// `max(x, 0)` as a select (one `maxpd`-style instruction; NaN maps to 0).
-#[inline(always)]
-fn positive_part(x: f64) -> f64 {
-    if x > 0.0 {
-        x
-    } else {
-        0.0
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4 {
+        (elastic + f64x4::splat(self.0) * v_r).fast_max(f64x4::ZERO) & loaded
     }
 }
 
@@ -140,10 +134,10 @@ struct Wave {
     phase: f64,
     /// Amplitude `Π_p` (m).
     amplitude: f64,
-    /// `Π_p cos(N α_r)` per (padded) ball (m).
-    cos_term: Vec<f64>,
-    /// `Π_p sin(N α_r)` per (padded) ball (m).
-    sin_term: Vec<f64>,
+    /// `Π_p cos(N α_r)` per ball, [`LANES`] at a time (m; 0 on pads).
+    cos_term: Vec<f64x4>,
+    /// `Π_p sin(N α_r)` per ball (m; 0 on pads).
+    sin_term: Vec<f64x4>,
 }
 
 /// The active damping law.
@@ -160,29 +154,39 @@ pub struct BallSet {
     balls: usize,
     stiffness: f64,
     law: Law,
-    /// `cos α_r`, `sin α_r` of each ball's base angle `α_r = 2π(r−1)/N_b`; 0 on pads.
-    dir_cos: Vec<f64>,
-    dir_sin: Vec<f64>,
-    /// `−P_d/2 + Π_T,i + Π_T,o` per ball (m); −∞ on pads.
-    base: Vec<f64>,
+    /// `cos α_r`, `sin α_r` of each ball's base angle `α_r = 2π(r−1)/N_b`, [`LANES`]
+    /// balls per vector; 0 on pads.
+    dir_cos: Vec<f64x4>,
+    dir_sin: Vec<f64x4>,
+    /// `−P_d/2 + Π_T,i + Π_T,o` (m).
+    base_offset: f64,
+    /// The base offset per ball; −∞ on pads.
+    base: Vec<f64x4>,
     /// Harmonics of both races with nonzero amplitude.
     waves: Vec<Wave>,
     /// Scratch: `base + Σ waviness` per ball for the current evaluation (m).
-    offset: Vec<f64>,
+    offset: Vec<f64x4>,
 }
 
 impl BallSet {
     /// The ball set of `params` (assumed validated).
     pub fn new(params: &BearingParams) -> Self {
         let n = params.ball_count;
-        let padded = n.div_ceil(LANES) * LANES;
-        let angle = |r: usize| std::f64::consts::TAU * r as f64 / n as f64;
-        let real = |r: usize, f: &dyn Fn(f64) -> f64, pad: f64| {
-            if r < n {
-                f(angle(r))
-            } else {
-                pad
-            }
+        let vectors = n.div_ceil(LANES);
+        // [`LANES`]-wide vectors of `f(α_r)` over the balls, `pad` past the last ball.
+        let per_ball = |f: &dyn Fn(f64) -> f64, pad: f64| -> Vec<f64x4> {
+            (0..vectors)
+                .map(|v| {
+                    f64x4::from(std::array::from_fn::<f64, LANES, _>(|l| {
+                        let r = v * LANES + l;
+                        if r < n {
+                            f(std::f64::consts::TAU * r as f64 / n as f64)
+                        } else {
+                            pad
+                        }
+                    }))
+                })
+                .collect()
         };
         let waves_of = |w: &RaceWaviness, race: Race| {
             w.harmonics
@@ -195,12 +199,8 @@ impl BallSet {
                         number: num,
                         phase: h.phase,
                         amplitude: a,
-                        cos_term: (0..padded)
-                            .map(|r| real(r, &|x| a * (num * x).cos(), 0.0))
-                            .collect(),
-                        sin_term: (0..padded)
-                            .map(|r| real(r, &|x| a * (num * x).sin(), 0.0))
-                            .collect(),
+                        cos_term: per_ball(&|x| a * (num * x).cos(), 0.0),
+                        sin_term: per_ball(&|x| a * (num * x).sin(), 0.0),
                     }
                 })
                 .collect::<Vec<_>>()
@@ -218,13 +218,12 @@ impl BallSet {
             balls: n,
             stiffness: params.stiffness,
             law,
-            dir_cos: (0..padded).map(|r| real(r, &f64::cos, 0.0)).collect(),
-            dir_sin: (0..padded).map(|r| real(r, &f64::sin, 0.0)).collect(),
-            base: (0..padded)
-                .map(|r| real(r, &|_| base_offset, f64::NEG_INFINITY))
-                .collect(),
+            dir_cos: per_ball(&f64::cos, 0.0),
+            dir_sin: per_ball(&f64::sin, 0.0),
+            base_offset,
+            base: per_ball(&|_| base_offset, f64::NEG_INFINITY),
             waves,
-            offset: vec![0.0; padded],
+            offset: vec![f64x4::ZERO; vectors],
         }
     }
 
@@ -245,7 +244,7 @@ impl BallSet {
 
     /// `F = Σ F_r n_r` and the loaded-ball count at state `s`. No allocation.
     pub fn force(&mut self, s: &ContactState) -> BallSum {
-        let offset: &[f64] = if self.waves.is_empty() {
+        let offset: &[f64x4] = if self.waves.is_empty() {
             &self.base
         } else {
             fill_offsets(&mut self.offset, &self.base, &self.waves, s);
@@ -265,7 +264,7 @@ impl BallSet {
         let alpha = std::f64::consts::TAU * r as f64 / self.balls as f64;
         let phi = alpha + s.cage;
         let normal = [phi.cos(), phi.sin()];
-        let mut delta = s.e[0] * normal[0] + s.e[1] * normal[1] + self.base[r];
+        let mut delta = s.e[0] * normal[0] + s.e[1] * normal[1] + self.base_offset;
         let (mut slope_in, mut slope_out) = (0.0, 0.0);
         for w in &self.waves {
             let psi = alpha
@@ -307,7 +306,7 @@ impl BallSet {
 
 /// `offset[r] = base[r] + Σ_h Π_p,h sin(N_h (α_r + ψ) + φ_h)`, with one `sin_cos`
 /// per harmonic: `sin(N α_r + x) = sin x cos N α_r + cos x sin N α_r`.
-fn fill_offsets(offset: &mut [f64], base: &[f64], waves: &[Wave], s: &ContactState) {
+fn fill_offsets(offset: &mut [f64x4], base: &[f64x4], waves: &[Wave], s: &ContactState) {
     offset.copy_from_slice(base);
     for w in waves {
         let psi = match w.race {
@@ -315,47 +314,42 @@ fn fill_offsets(offset: &mut [f64], base: &[f64], waves: &[Wave], s: &ContactSta
             Race::Outer => s.psi_out,
         };
         let (sn, cs) = (w.number * psi + w.phase).sin_cos();
+        let (sn, cs) = (f64x4::splat(sn), f64x4::splat(cs));
         for ((o, c), s) in offset.iter_mut().zip(&w.cos_term).zip(&w.sin_term) {
-            *o += sn * c + cs * s;
+            *o += sn * *c + cs * *s;
         }
     }
 }
 
-/// The branch-free ball loop over lane chunks.
+/// The branch-free ball loop, [`LANES`] balls per iteration.
 #[inline(always)]
 fn sum_balls<D: DampingLaw>(
-    dir_cos: &[f64],
-    dir_sin: &[f64],
-    offset: &[f64],
+    dir_cos: &[f64x4],
+    dir_sin: &[f64x4],
+    offset: &[f64x4],
     s: &ContactState,
     stiffness: f64,
     law: D,
 ) -> BallSum {
     let (sc, cc) = s.cage.sin_cos();
-    let ([ex, ey], [vx, vy]) = (s.e, s.v);
-    let mut fx = [0.0; LANES];
-    let mut fy = [0.0; LANES];
-    let mut loaded = [0.0; LANES];
-    let chunks = dir_cos
-        .chunks_exact(LANES)
-        .zip(dir_sin.chunks_exact(LANES))
-        .zip(offset.chunks_exact(LANES));
-    for ((dc, ds), off) in chunks {
-        for l in 0..LANES {
-            let nx = cc * dc[l] - sc * ds[l];
-            let ny = sc * dc[l] + cc * ds[l];
-            let delta = ex * nx + ey * ny + off[l];
-            let v_r = vx * nx + vy * ny;
-            let mask = if delta > 0.0 { 1.0 } else { 0.0 };
-            let d = positive_part(delta);
-            let f = law.force(stiffness * d * d.sqrt(), v_r, mask);
-            fx[l] += f * nx;
-            fy[l] += f * ny;
-            loaded[l] += mask;
-        }
+    let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
+    let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
+    let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
+    let k = f64x4::splat(stiffness);
+    let (mut fx, mut fy, mut loaded) = (f64x4::ZERO, f64x4::ZERO, f64x4::ZERO);
+    for ((dc, ds), off) in dir_cos.iter().zip(dir_sin).zip(offset) {
+        let nx = cc * *dc - sc * *ds;
+        let ny = sc * *dc + cc * *ds;
+        let delta = ex * nx + ey * ny + *off;
+        let mask = delta.simd_gt(f64x4::ZERO);
+        let d = delta.fast_max(f64x4::ZERO);
+        let f = law.force(k * d * d.sqrt(), vx * nx + vy * ny, mask);
+        fx += f * nx;
+        fy += f * ny;
+        loaded += f64x4::ONE & mask;
     }
     BallSum {
-        force: [fx.iter().sum(), fy.iter().sum()],
-        loaded: loaded.iter().sum::<f64>() as usize,
+        force: [fx.reduce_add(), fy.reduce_add()],
+        loaded: loaded.reduce_add() as usize,
     }
 }
