@@ -6,8 +6,10 @@
 //!
 //! The data's path through the crate:
 //!
-//! 1. [`mechanism`] builds a case: the slider-crank on the general planar
-//!    [`multibody`] core, with the [`bearing`] force element at the chosen location.
+//! 1. [`mechanism`] builds a case: the slider-crank in minimal coordinates (the
+//!    bearing eccentricity), with the [`bearing`]'s SIMD ball kernel at the chosen
+//!    location. The same mechanism on the general planar [`multibody`] core is the
+//!    reference it is tested against, and carries the energy ledger.
 //! 2. [`solve`] integrates it with an adaptive Dormand–Prince pair, fixed-step RK4
 //!    or an implicit SDIRK method.
 //! 3. [`simulate`] samples the outputs of MODEL.md §3 at exact sample times and
