@@ -1,8 +1,8 @@
 //! What accuracy costs in time: every integrator over a ladder of settings against a
 //! tight reference, per case of a grid (`studyrun accuracy GRID.yaml`).
 //!
-//! **Reference.** DOPRI5 at rtol 1e-12 (atol 1e-16), validated by a second run at
-//! rtol 1e-11: where the two agree the reference's own error is below their
+//! **Reference.** DOPRI5 at rtol 1e-11 (atol 1e-15), validated by a second run at
+//! rtol 1e-10: where the two agree the reference's own error is below their
 //! difference. The first time their slider accelerations differ by more than
 //! [`HORIZON_THRESHOLD`] of its range is the case's **predictability horizon**
 //! (MODEL.md §8: chaotic cases part after tens of milliseconds); if they never do,
@@ -14,7 +14,7 @@
 //! integrator. **Metric error**: the relative error of the vibration metric a user
 //! reads (RMS deviation from the ideal mechanism over `t ≥ transient`, a statistic
 //! that stays meaningful past the horizon), next to the reference's own metric
-//! uncertainty (the 1e-11 run's metric against the 1e-12 run's).
+//! uncertainty (the 1e-10 run's metric against the 1e-11 run's).
 //!
 //! **Cost** per setting: wall time, steps, rejected steps, RHS evaluations.
 
@@ -34,21 +34,25 @@ pub const HORIZON_THRESHOLD: f64 = 1e-3;
 /// Channels whose errors are measured, in order.
 pub const ERROR_CHANNELS: [&str; 3] = ["slider_acceleration", "crank_moment", "bearing_force"];
 
-/// The reference setting.
+/// The reference setting. In minimal coordinates the error is measured relative to
+/// the micrometre eccentricity and its mm/s rate, so rtol 1e-11 is already far
+/// tighter than the same rtol on Cartesian coordinates; at rtol 1e-12 a damping
+/// onset (a jump of `C v_r` in a ball force) can need steps below what `t`'s
+/// precision resolves (paper case 30 does).
 pub const REFERENCE: Method = Method::DormandPrince {
-    rtol: 1e-12,
-    atol: 1e-16,
+    rtol: 1e-11,
+    atol: 1e-15,
 };
 /// The setting that validates the reference.
 pub const CHECK: Method = Method::DormandPrince {
-    rtol: 1e-11,
-    atol: 1e-15,
+    rtol: 1e-10,
+    atol: 1e-14,
 };
 
 /// The default ladder: DOPRI5 and SDIRK4 over tolerances, RK4 over steps including
 /// the paper's 20 µs. `atol = 1e-4 rtol` (state units: m, m/s).
 pub fn default_ladder() -> Vec<Method> {
-    let mut ladder: Vec<Method> = (3..=10)
+    let mut ladder: Vec<Method> = (3..=9)
         .map(|k| Method::DormandPrince {
             rtol: 10f64.powi(-k),
             atol: 10f64.powi(-k - 4),
@@ -82,7 +86,7 @@ pub struct CaseReference {
     pub metrics: VibrationMetrics,
     /// Predictability horizon (s); the run's duration if the two tight runs never part.
     pub horizon: f64,
-    /// Relative difference of each channel's metric between the 1e-11 and 1e-12 runs.
+    /// Relative difference of each channel's metric between the 1e-10 and 1e-11 runs.
     pub metric_uncertainty: [f64; 3],
 }
 
@@ -243,7 +247,14 @@ pub fn run(
     let ideals = crate::run::run_references(study)?;
     let references: Vec<CaseReference> = (0..study.cases.len())
         .into_par_iter()
-        .map(|k| reference(study, k, &ideals[study.cases[k].reference]))
+        .map(|k| {
+            reference(study, k, &ideals[study.cases[k].reference]).map_err(|e| {
+                anyhow::anyhow!(
+                    "reference run of case {} failed (reference {REFERENCE:?}): {e}",
+                    study.cases[k].id
+                )
+            })
+        })
         .collect::<Result<_, _>>()?;
     let jobs: Vec<(usize, Method)> = references
         .iter()
@@ -343,7 +354,7 @@ pub fn write_file(
         f64_param(
             "horizon",
             "s",
-            "predictability horizon of the case (reference runs at rtol 1e-11 and 1e-12 part)",
+            "predictability horizon of the case (reference runs at rtol 1e-10 and 1e-11 part)",
             &|m| reference_of(m).horizon,
         ),
     ];
@@ -351,7 +362,7 @@ pub fn write_file(
         parameters.push(f64_param(
             &format!("reference_metric_uncertainty_{ch}"),
             "1",
-            "relative difference of the metric between the rtol 1e-11 and 1e-12 references",
+            "relative difference of the metric between the rtol 1e-10 and 1e-11 references",
             &|m| reference_of(m).metric_uncertainty[c],
         ));
     }
