@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-MARKERS = {"dopri5": "o", "sdirk4": "s", "rk4": "^"}
+MARKERS = {"dopri5": "o", "tsit5": "D", "dop853": "v", "sdirk4": "s", "rk4": "^"}
 
 
 def points(ds, error="metric", channel="slider_acceleration", cost="wall_time", stat="max", chaotic=False):

@@ -49,27 +49,36 @@ pub const CHECK: Method = Method::DormandPrince {
     atol: 1e-14,
 };
 
-/// The default ladder: DOPRI5 and SDIRK4 over tolerances, RK4 over steps including
-/// the paper's 20 µs. `atol = 1e-4 rtol` (state units: m, m/s).
+/// The default ladder: the explicit pairs (DOPRI5, Tsit5, DOP853) at rtol 1e-3 …
+/// 1e-9 (below the check run's 1e-10) and SDIRK4 at 1e-3 … 1e-8 with `atol = 1e-4 rtol` (state units: m, m/s);
+/// RK4 over steps including the paper's 20 µs.
 pub fn default_ladder() -> Vec<Method> {
-    let mut ladder: Vec<Method> = (3..=9)
-        .map(|k| Method::DormandPrince {
-            rtol: 10f64.powi(-k),
-            atol: 10f64.powi(-k - 4),
-        })
-        .collect();
-    ladder.extend((3..=8).map(|k| Method::Sdirk4 {
-        rtol: 10f64.powi(-k),
-        atol: 10f64.powi(-k - 4),
-    }));
+    let tolerances =
+        |range: std::ops::RangeInclusive<i32>| range.map(|k| (10f64.powi(-k), 10f64.powi(-k - 4)));
+    let mut ladder = Vec::new();
+    for pair in [
+        |rtol, atol| Method::DormandPrince { rtol, atol },
+        |rtol, atol| Method::Tsit5 { rtol, atol },
+        |rtol, atol| Method::Dop853 { rtol, atol },
+    ] {
+        ladder.extend(tolerances(3..=9).map(|(rtol, atol)| pair(rtol, atol)));
+    }
+    ladder.extend(tolerances(3..=8).map(|(rtol, atol)| Method::Sdirk4 { rtol, atol }));
     ladder.extend([80e-6, 40e-6, 20e-6, 10e-6, 5e-6].map(|step| Method::Rk4 { step }));
     ladder
 }
 
-/// Name and setting value of a method: (`dopri5` | `sdirk4` | `rk4`, rtol or step in s).
+/// The integrators' names, as [`describe`] gives them and the grid file's
+/// `solver.method` takes them.
+pub const METHOD_NAMES: [&str; 5] = ["dopri5", "tsit5", "dop853", "sdirk4", "rk4"];
+
+/// Name and setting value of a method: (`dopri5` | `tsit5` | `dop853` | `sdirk4` |
+/// `rk4`, rtol or step in s). The names are those of the grid file's `solver.method`.
 pub fn describe(m: &Method) -> (&'static str, f64) {
     match *m {
         Method::DormandPrince { rtol, .. } => ("dopri5", rtol),
+        Method::Tsit5 { rtol, .. } => ("tsit5", rtol),
+        Method::Dop853 { rtol, .. } => ("dop853", rtol),
         Method::Sdirk4 { rtol, .. } => ("sdirk4", rtol),
         Method::Rk4 { step } => ("rk4", step),
     }
@@ -338,7 +347,11 @@ pub fn write_file(
             study.cases[m.case].id as f64
         }),
         Param {
-            spec: VarSpec::new("method", "1", "integrator: dopri5, sdirk4 or rk4"),
+            spec: VarSpec::new(
+                "method",
+                "1",
+                "integrator: dopri5, tsit5, dop853, sdirk4 or rk4",
+            ),
             values: ParamValues::Str(
                 ms.iter()
                     .map(|m| describe(&m.method).0.to_string())
@@ -348,7 +361,7 @@ pub fn write_file(
         f64_param(
             "setting",
             "1",
-            "relative tolerance (dopri5, sdirk4) or step in s (rk4)",
+            "relative tolerance (dopri5, tsit5, dop853, sdirk4) or step in s (rk4)",
             &|m| describe(&m.method).1,
         ),
         f64_param(

@@ -31,6 +31,7 @@ Examples:
   studyrun inspect out.h5                          summary, status counts, failed cases
   studyrun validate grid.yaml                      check a grid file without running it
   studyrun accuracy studies/accuracy.yaml          error and cost of every integrator setting
+  studyrun accuracy grid.yaml --methods tsit5      only one integrator's settings
 
 Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.";
 
@@ -73,6 +74,9 @@ enum Command {
         /// Overwrite OUTPUT if it exists.
         #[arg(long)]
         force: bool,
+        /// Only these integrators of the ladder, comma-separated [default: all].
+        #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(studyrun::accuracy::METHOD_NAMES))]
+        methods: Vec<String>,
     },
     /// Combine the shard files of one study into one file.
     Merge {
@@ -140,7 +144,8 @@ pub fn main() -> ExitCode {
             output,
             jobs,
             force,
-        }) => accuracy_command(&grid, output, jobs, force),
+            methods,
+        }) => accuracy_command(&grid, output, jobs, force, &methods),
         Some(Command::Merge {
             output,
             shards,
@@ -272,6 +277,7 @@ fn accuracy_command(
     output: Option<PathBuf>,
     jobs: Option<usize>,
     force: bool,
+    methods: &[String],
 ) -> Result<u8> {
     use studyrun::accuracy::{self, describe, ERROR_CHANNELS};
     let study = load(grid)?;
@@ -283,7 +289,10 @@ fn accuracy_command(
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
-    let ladder = accuracy::default_ladder();
+    let mut ladder = accuracy::default_ladder();
+    if !methods.is_empty() {
+        ladder.retain(|m| methods.iter().any(|name| name == describe(m).0));
+    }
     eprintln!(
         "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
         ladder.len(),

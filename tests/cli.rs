@@ -256,3 +256,41 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     );
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
+
+#[test]
+fn accuracy_measures_only_the_chosen_methods() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "acc.yaml",
+        "name: acc\nduration: 0.01\nsample_rate: 10000\ntransient: \"0.005 s\"\nlocation: crank_rod\nrpm: 600\ngrid:\n  ball_count: [9]\n",
+    );
+    let out = studyrun(
+        dir.path(),
+        &[
+            "accuracy",
+            "acc.yaml",
+            "--methods",
+            "tsit5,dop853",
+            "-o",
+            "acc.h5",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    // 8 tolerances each, in the case's table and in the summary.
+    for (name, rows) in [("tsit5", 16), ("dop853", 16), ("dopri5", 0), ("rk4", 0)] {
+        let n = stdout.matches(&format!("| {name} |")).count();
+        assert_eq!(n, rows, "{name}: {stdout}");
+    }
+    let file = StudyReader::open(dir.path().join("acc.h5")).unwrap();
+    assert_eq!(file.layout().case_ids.len(), 16);
+    // An unknown name is a usage error that lists the known ones.
+    let bad = studyrun(dir.path(), &["accuracy", "acc.yaml", "--methods", "euler"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        stderr.contains("possible values: dopri5, tsit5, dop853, sdirk4, rk4"),
+        "{stderr}"
+    );
+}

@@ -243,7 +243,11 @@ fn invalid_grids_are_refused_with_place_field_and_reason() {
         // solver and output settings
         (
             "solver:\n  method: euler\ngrid:\n  rpm: [300]\n",
-            &["grid.yaml:5:", "solver.method", "dopri5, rk4 or sdirk4"],
+            &[
+                "grid.yaml:5:",
+                "solver.method",
+                "dopri5, tsit5, dop853, rk4 or sdirk4",
+            ],
         ),
         (
             "solver:\n  rtol: -1\ngrid:\n  rpm: [300]\n",

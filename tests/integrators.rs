@@ -31,6 +31,28 @@ impl OdeSystem for Forced {
     }
 }
 
+/// `y' = y cos t`, `y(0) = 1`: `y = e^{sin t}`. Non-autonomous, so as a system in
+/// `(y, t)` it is nonlinear and every elementary differential contributes to the
+/// error (on a linear autonomous problem some pairs' leading error terms nearly
+/// cancel, e.g. Tsit5's).
+struct ExpSin;
+
+impl ExpSin {
+    fn exact(t: f64) -> f64 {
+        t.sin().exp()
+    }
+}
+
+impl OdeSystem for ExpSin {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+        dydt[0] = y[0] * t.cos();
+        Ok(())
+    }
+}
+
 /// Harmonic oscillator `x'' = −ω² x`, `x(0) = 1`, `x'(0) = 0`: `x = cos ωt`.
 struct Oscillator {
     omega: f64,
@@ -140,6 +162,27 @@ impl OdeSystem for FailsLater {
     }
 }
 
+/// `y' = −y` whose evaluation number `fail_at` (counting from 1) fails; records
+/// the times of all evaluations.
+struct FailsOnce {
+    fail_at: usize,
+    times: Vec<f64>,
+}
+
+impl OdeSystem for FailsOnce {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+        self.times.push(t);
+        if self.times.len() == self.fail_at {
+            return Err(ModelError::SingularConstraints);
+        }
+        dydt[0] = -y[0];
+        Ok(())
+    }
+}
+
 /// A system without state.
 struct Empty;
 
@@ -158,6 +201,39 @@ impl OdeSystem for Empty {
 
 fn dp(rtol: f64, atol: f64) -> SolverSettings {
     SolverSettings::new(Method::DormandPrince { rtol, atol })
+}
+
+/// The adaptive explicit pairs: name, method at `(rtol, atol)`, order of the
+/// solution and of the continuous extension.
+type Pair = (&'static str, fn(f64, f64) -> Method, u32, u32);
+
+const PAIRS: [Pair; 3] = [
+    (
+        "DOPRI5",
+        |rtol, atol| Method::DormandPrince { rtol, atol },
+        5,
+        4,
+    ),
+    ("Tsit5", |rtol, atol| Method::Tsit5 { rtol, atol }, 5, 4),
+    ("DOP853", |rtol, atol| Method::Dop853 { rtol, atol }, 8, 7),
+];
+
+fn tsit5(rtol: f64, atol: f64) -> SolverSettings {
+    SolverSettings::new(Method::Tsit5 { rtol, atol })
+}
+
+fn dop853(rtol: f64, atol: f64) -> SolverSettings {
+    SolverSettings::new(Method::Dop853 { rtol, atol })
+}
+
+/// Least-squares slope of `ln y` against `ln x`.
+fn log_slope(x: &[f64], y: &[f64]) -> f64 {
+    let (lx, ly): (Vec<f64>, Vec<f64>) = x.iter().zip(y).map(|(a, b)| (a.ln(), b.ln())).unzip();
+    let n = lx.len() as f64;
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
 }
 
 fn rk4(step: f64) -> SolverSettings {
@@ -245,37 +321,107 @@ fn rk4_converges_with_order_four() {
 }
 
 #[test]
-fn dormand_prince_error_falls_with_tolerance_on_steps_and_dense_output() {
+fn explicit_pairs_error_falls_with_tolerance_on_steps_and_dense_output() {
     // Oscillator ω = 2π over [0, 5] (5 periods; x has scale 1, x' scale 2π);
     // 1000 samples at cell midpoints, which do not coincide with step ends.
     let mut osc = Oscillator {
         omega: 2.0 * std::f64::consts::PI,
     };
     let times = midpoints(5.0, 1000);
-    let mut finals = Vec::new();
-    let mut denses = Vec::new();
-    for e in 4..=10 {
-        let tol = 10f64.powi(-e);
-        let (stats, seen) = run(&mut osc, &dp(tol, tol), &[1.0, 0.0], &times);
-        let (dense, last) = errors(&seen, |t| osc.exact(t).to_vec());
-        eprintln!(
-            "DP rtol 1e-{e}: steps {}, rejected {}, final error {last:.3e}, dense error {dense:.3e}",
-            stats.steps, stats.rejected
-        );
-        finals.push(last);
-        denses.push(dense);
-    }
-    for errs in [&finals, &denses] {
-        // Monotone over the ladder 1e-4, 1e-5, ..., 1e-10.
-        for w in errs.windows(2) {
-            assert!(w[1] < w[0], "error did not fall: {errs:?}");
+    for (name, method, _, _) in PAIRS {
+        let (mut tols, mut finals, mut denses) = (vec![], vec![], vec![]);
+        for e in 4..=10 {
+            let tol = 10f64.powi(-e);
+            let (stats, seen) = run(
+                &mut osc,
+                &SolverSettings::new(method(tol, tol)),
+                &[1.0, 0.0],
+                &times,
+            );
+            let (dense, last) = errors(&seen, |t| osc.exact(t).to_vec());
+            eprintln!(
+                "{name} rtol 1e-{e}: steps {}, rejected {}, final error {last:.3e}, dense error {dense:.3e}",
+                stats.steps, stats.rejected
+            );
+            tols.push(tol);
+            finals.push(last);
+            denses.push(dense);
         }
-        // Overall by more than 1e4.
-        assert!(errs[0] / errs[errs.len() - 1] > 1e4, "{errs:?}");
+        for errs in [&finals, &denses] {
+            // Monotone over the ladder 1e-4, 1e-5, ..., 1e-10.
+            for w in errs.windows(2) {
+                assert!(w[1] < w[0], "{name}: error did not fall: {errs:?}");
+            }
+            // Overall by more than 1e4.
+            assert!(errs[0] / errs[errs.len() - 1] > 1e4, "{name}: {errs:?}");
+            // Proportional to the tolerance: error ∝ tol^s with s in [0.8, 1.3]
+            // (measured 0.97 to 1.20 at step ends and between them).
+            let slope = log_slope(&tols, errs);
+            eprintln!("{name}: error ∝ tol^{slope:.2}");
+            assert!((0.8..=1.3).contains(&slope), "{name}: error ∝ tol^{slope}");
+        }
+        // Dense output at rtol 1e-10: below 1e-8 (absolute, i.e. 1e-8 of the smaller
+        // solution scale 1, for both components).
+        assert!(denses[denses.len() - 1] < 1e-8, "{name}: {denses:?}");
     }
-    // Dense output at rtol 1e-10: below 1e-8 (absolute, i.e. 1e-8 of the smaller
-    // solution scale 1, for both components).
-    assert!(denses[denses.len() - 1] < 1e-8, "{denses:?}");
+}
+
+#[test]
+fn explicit_pairs_converge_with_their_order_at_fixed_steps() {
+    // y' = y cos t on [0, 10] with N equal steps (max_step = 10/N and a tolerance
+    // that never binds, so no step is rejected); samples at every step end and at
+    // every step's midpoint. N from errors of ~1e-9 down to well above rounding.
+    let t_end = 10.0;
+    for (name, method, order, dense_order) in PAIRS {
+        let ns: &[usize] = if order == 8 {
+            &[20, 25, 35, 50, 70]
+        } else {
+            &[100, 141, 200, 283, 400]
+        };
+        let (mut hs, mut ends, mut mids) = (vec![], vec![], vec![]);
+        for &n in ns {
+            let h = t_end / n as f64;
+            let times: Vec<f64> = (1..=2 * n).map(|k| k as f64 * h / 2.0).collect();
+            let mut s = SolverSettings::new(method(1.0, 1.0));
+            s.max_step = h;
+            let (stats, seen) = run(&mut ExpSin, &s, &[1.0], &times);
+            assert_eq!((stats.steps, stats.rejected), (n as u64, 0), "{name}");
+            let err = |(t, y): &(f64, Vec<f64>)| (y[0] - ExpSin::exact(*t)).abs();
+            let end = seen.iter().skip(1).step_by(2).map(err).fold(0.0, f64::max);
+            let mid = seen.iter().step_by(2).map(err).fold(0.0, f64::max);
+            eprintln!(
+                "{name} h = {h:.4}: {} RHS, step-end error {end:.3e}, midpoint error {mid:.3e} ({:.1} times)",
+                stats.rhs_evals,
+                mid / end
+            );
+            hs.push(h);
+            ends.push(end);
+            mids.push(mid);
+        }
+        // Between step ends the error stays within a small factor of the step ends'
+        // (measured 1.3 DOPRI5, 2.3 Tsit5, 8.3 DOP853, constant in h).
+        let factor = if order == 8 { 20.0 } else { 5.0 };
+        for (m, e) in mids.iter().zip(&ends) {
+            assert!(
+                *m < factor * e,
+                "{name}: midpoint error {m:e} vs step ends {e:e}"
+            );
+        }
+        let (p_end, p_mid) = (log_slope(&hs, &ends), log_slope(&hs, &mids));
+        // The solution's global error has the pair's order; between step ends the
+        // continuous extension adds a local error of order dense_order + 1, so the
+        // midpoint error converges with min(order, dense_order + 1).
+        let p_dense = order.min(dense_order + 1);
+        eprintln!("{name}: observed order {p_end:.3} at step ends (theory {order}), {p_mid:.3} at midpoints (theory {p_dense})");
+        assert!(
+            (p_end - f64::from(order)).abs() < 0.3,
+            "{name}: order {p_end}"
+        );
+        assert!(
+            (p_mid - f64::from(p_dense)).abs() < 0.3,
+            "{name}: dense order {p_mid}"
+        );
+    }
 }
 
 #[test]
@@ -395,6 +541,8 @@ fn all_methods_agree_on_van_der_pol() {
     // Bounds on the largest difference over samples and components (scale ~2–3).
     for (settings, bound) in [
         (dp(1e-10, 1e-10), 1e-7),
+        (tsit5(1e-10, 1e-10), 1e-7),
+        (dop853(1e-10, 1e-10), 1e-7),
         (rk4(1e-3), 1e-9),
         (sdirk(1e-10, 1e-10), 1e-6),
     ] {
@@ -409,8 +557,14 @@ fn all_methods_agree_on_van_der_pol() {
 // Observer semantics
 // ---------------------------------------------------------------------------
 
-fn all_methods() -> [SolverSettings; 3] {
-    [dp(1e-9, 1e-9), rk4(0.01), sdirk(1e-9, 1e-9)]
+fn all_methods() -> [SolverSettings; 5] {
+    [
+        dp(1e-9, 1e-9),
+        tsit5(1e-9, 1e-9),
+        dop853(1e-9, 1e-9),
+        rk4(0.01),
+        sdirk(1e-9, 1e-9),
+    ]
 }
 
 #[test]
@@ -468,7 +622,12 @@ fn degenerate_sample_sets_call_nothing_or_only_the_observer() {
 #[test]
 fn blow_up_ends_with_an_error_not_a_panic_or_hang() {
     // y' = y², y(0) = 1, to t = 2 (pole at t = 1).
-    for settings in [dp(1e-6, 1e-6), sdirk(1e-6, 1e-6)] {
+    for settings in [
+        dp(1e-6, 1e-6),
+        tsit5(1e-6, 1e-6),
+        dop853(1e-6, 1e-6),
+        sdirk(1e-6, 1e-6),
+    ] {
         let err = integrate(
             &mut BlowUp,
             &settings,
@@ -501,7 +660,12 @@ fn blow_up_ends_with_an_error_not_a_panic_or_hang() {
 #[test]
 fn step_budget_counts_and_stops() {
     let times = [10.0];
-    for settings in [dp(1e-8, 1e-8), sdirk(1e-8, 1e-8)] {
+    for settings in [
+        dp(1e-8, 1e-8),
+        tsit5(1e-8, 1e-8),
+        dop853(1e-8, 1e-8),
+        sdirk(1e-8, 1e-8),
+    ] {
         let tiny = SolverSettings {
             max_steps: 5,
             ..settings
@@ -610,6 +774,39 @@ fn model_and_observer_errors_propagate_with_their_time() {
 }
 
 #[test]
+fn dop853_rejects_a_step_whose_extra_dense_stage_fails() {
+    // Evaluations 1 and 2 are f(t0) and the initial step's probe, 3 to 14 the 12
+    // stages of the first step (the last at t0 + h); with samples inside that step
+    // the 15th is the first extra stage of the continuous extension, at t0 + 0.1 h.
+    // It fails: the step is rejected and retried with h/10, and the run ends well.
+    let mut sys = FailsOnce {
+        fail_at: 15,
+        times: Vec::new(),
+    };
+    let times = midpoints(1.0, 100);
+    let (s, seen) = run(&mut sys, &dop853(1e-8, 1e-8), &[1.0], &times);
+    eprintln!("DOP853 with a failing extra stage: {s:?}");
+    let (t14, t15) = (sys.times[13], sys.times[14]);
+    // The failure hit the extra stage at 0.1 h of a first step ending at t14
+    // (a retried stage would sit at c_2 h' = 0.0526 h' < 0.1 h).
+    assert!(
+        (t15 - 0.1 * t14).abs() < 1e-12 * t14,
+        "t14 = {t14}, t15 = {t15}"
+    );
+    assert!(s.rejected >= 1, "{s:?}");
+    // 12 per attempt, 2 at the start, 3 per accepted step with samples inside, and
+    // the failed extra evaluation.
+    assert_eq!(
+        (s.rhs_evals - 2 - 12 * (s.steps + s.rejected)) % 3,
+        1,
+        "{s:?}"
+    );
+    // Values within 10 × tol of e^{−t} at every sample (measured 1.8e-8).
+    let (err, _) = errors(&seen, |t| vec![(-t).exp()]);
+    assert!(err < 1e-7, "{err:e}");
+}
+
+#[test]
 fn invalid_settings_name_the_field() {
     let check = |settings: SolverSettings, t0: f64, y0: &[f64], times: &[f64], needle: &str| {
         match integrate(&mut Forced, &settings, t0, y0, times, |_, _, _| Ok(())) {
@@ -624,6 +821,8 @@ fn invalid_settings_name_the_field() {
     check(dp(0.0, 1e-6), 0.0, &ok, &t, "rtol = 0");
     check(dp(1e-6, -1.0), 0.0, &ok, &t, "atol = -1");
     check(sdirk(f64::NAN, 1e-6), 0.0, &ok, &t, "rtol = NaN");
+    check(tsit5(-1e-6, 1e-6), 0.0, &ok, &t, "rtol = -0.000001");
+    check(dop853(1e-6, 0.0), 0.0, &ok, &t, "atol = 0");
     check(sdirk(1e-6, f64::INFINITY), 0.0, &ok, &t, "atol = inf");
     check(rk4(0.0), 0.0, &ok, &t, "step = 0");
     check(rk4(-0.1), 0.0, &ok, &t, "step = -0.1");
@@ -656,18 +855,34 @@ fn invalid_settings_name_the_field() {
 
 #[test]
 fn stats_match_the_methods_costs() {
-    // Dormand–Prince with FSAL: 6 evaluations per attempted step, plus f(t0) and the
-    // one of the initial step-size selection.
+    // The 5(4) pairs with FSAL: 6 evaluations per attempted step, plus f(t0) and the
+    // one of the initial step-size selection (DOPRI5 at 1e-8 and Tsit5 at 1e-6, where
+    // both reject some steps).
+    for settings in [dp(1e-8, 1e-8), tsit5(1e-6, 1e-6)] {
+        let (s, _) = run(&mut VanDerPol, &settings, &[2.0, 0.0], &midpoints(10.0, 50));
+        eprintln!("{:?} on Van der Pol: {s:?}", settings.method);
+        assert!(s.rejected > 0, "want a run with rejections: {s:?}");
+        assert_eq!(s.rhs_evals, 6 * (s.steps + s.rejected) + 2);
+        assert_eq!((s.jacobians, s.factorizations), (0, 0));
+    }
+
+    // DOP853: 12 per attempted step and 2 at the start, plus 3 for the continuous
+    // extension of each accepted step with a sample strictly inside: none when the
+    // only sample is the end, at most one per sample otherwise.
+    let (s, _) = run(&mut VanDerPol, &dop853(1e-8, 1e-8), &[2.0, 0.0], &[10.0]);
+    eprintln!("DOP853 on Van der Pol, one sample: {s:?}");
+    assert!(s.rejected > 0, "want a run with rejections: {s:?}");
+    assert_eq!(s.rhs_evals, 12 * (s.steps + s.rejected) + 2);
     let (s, _) = run(
         &mut VanDerPol,
-        &dp(1e-8, 1e-8),
+        &dop853(1e-8, 1e-8),
         &[2.0, 0.0],
         &midpoints(10.0, 50),
     );
-    eprintln!("DP on Van der Pol: {s:?}");
-    assert!(s.rejected > 0, "want a run with rejections: {s:?}");
-    assert_eq!(s.rhs_evals, 6 * (s.steps + s.rejected) + 2);
-    assert_eq!((s.jacobians, s.factorizations), (0, 0));
+    eprintln!("DOP853 on Van der Pol, 51 samples: {s:?}");
+    let dense = s.rhs_evals - 12 * (s.steps + s.rejected) - 2;
+    assert!(dense % 3 == 0 && (3..=3 * 50).contains(&dense), "{s:?}");
+    assert!(dense / 3 <= s.steps, "{s:?}");
 
     // RK4: 4 per step; step count ceil((T − t0)/h) without a rounding sliver.
     for (t_end, steps) in [(1.0, 10), (0.3, 3), (1.05, 11)] {

@@ -131,11 +131,13 @@ pub(crate) struct StepController {
 }
 
 impl StepController {
-    /// Controller for an embedded estimate of order `q` (error ∝ h^{q+1}):
-    /// `α = 1/(q+1) − 0.75 β` (HNW I, eq. II.4.43 with Hairer's choice of α).
-    pub fn new(embedded_order: u32, beta: f64) -> Self {
+    /// Controller for an error estimate that behaves like `h^{q+1}` (`q`: the order
+    /// of the embedded solution; 7 for DOP853's combined estimate):
+    /// `α = 1/(q+1) − 0.75 β` (HNW I, eq. II.4.43 with Hairer's choice of α; DOPRI5's
+    /// `0.2 − 0.75 β`, DOP853's `1/8` at its default β = 0).
+    pub fn new(error_order: u32, beta: f64) -> Self {
         Self {
-            alpha: 1.0 / f64::from(embedded_order + 1) - 0.75 * beta,
+            alpha: 1.0 / f64::from(error_order + 1) - 0.75 * beta,
             beta,
             err_prev: 1e-4,
             rejected_last: false,

@@ -1,10 +1,11 @@
-//! One explicit Runge–Kutta engine driven by [`ExplicitTableau`] data, and the two
-//! methods built on it: adaptive Dormand–Prince 5(4) and fixed-step RK4.
+//! One explicit Runge–Kutta engine driven by [`ExplicitTableau`] data: the adaptive
+//! FSAL pairs with their continuous extensions (Dormand–Prince 5(4), Tsitouras 5(4),
+//! Dormand–Prince 8(5,3)) and fixed-step RK4.
 
-use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, PI_BETA};
+use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, NON_FINITE_CUT};
 use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
-use super::tableau::{ExplicitTableau, DORMAND_PRINCE, RK4};
+use super::tableau::{DenseOutput, ExplicitTableau, RK4};
 use super::{OdeSystem, SolveError, Stats};
 use crate::error::ModelError;
 
@@ -16,7 +17,8 @@ const STEP_COUNT_SLACK: f64 = 1e-6;
 /// Buffers of one integration, allocated once per run.
 struct Workspace {
     n: usize,
-    /// Stage slopes, stage-major: `k[i*n..(i+1)*n]` is `k_i` (state units per s).
+    /// Stage slopes, stage-major: `k[i*n..(i+1)*n]` is `k_i` (state units per s);
+    /// the step's stages, then the extra stages of the continuous extension.
     k: Vec<f64>,
     /// State at the start of the current step.
     y: Vec<f64>,
@@ -28,19 +30,24 @@ struct Workspace {
     out: Vec<f64>,
     /// Slope at the end of a step, when Hermite interpolation needs it (RK4).
     f_end: Vec<f64>,
+    /// The higher terms `F_{3+j}` of the current step's continuous extension,
+    /// row-major (state units).
+    cont: Vec<f64>,
 }
 
 impl Workspace {
-    fn new(y0: &[f64], stages: usize) -> Self {
+    fn new(y0: &[f64], tab: &ExplicitTableau) -> Self {
         let n = y0.len();
+        let rows = tab.dense.as_ref().map_or(0, |d| d.d.len());
         Self {
             n,
-            k: vec![0.0; stages * n],
+            k: vec![0.0; tab.all_stages() * n],
             y: y0.to_vec(),
             y_new: vec![0.0; n],
             scratch: vec![0.0; n],
             out: vec![0.0; n],
             f_end: vec![0.0; n],
+            cont: vec![0.0; rows * n],
         }
     }
 }
@@ -62,84 +69,158 @@ enum StepOutcome {
     ModelFailed(SolveError),
 }
 
+/// `h Σ_j w_j k_j[m]`: component `m` of the increment with weights `w` over the
+/// stage-major slopes `k` of `n` components each.
+fn increment(h: f64, w: impl Iterator<Item = f64>, k: &[f64], n: usize, m: usize) -> f64 {
+    h * w.enumerate().map(|(j, wj)| wj * k[j * n + m]).sum::<f64>()
+}
+
 /// `out = y + h Σ_j w_j k_j` over the stage-major slopes `k`.
 fn combine(y: &[f64], h: f64, weights: &[f64], k: &[f64], out: &mut [f64]) {
     let n = y.len();
     for (m, o) in out.iter_mut().enumerate() {
-        let acc: f64 = weights
-            .iter()
-            .enumerate()
-            .map(|(j, wj)| wj * k[j * n + m])
-            .sum();
-        *o = y[m] + h * acc;
+        *o = y[m] + increment(h, weights.iter().copied(), k, n, m);
+    }
+}
+
+/// Stage `i` of a step of size `h` (s) from `(t, y)`, with node `c` and row `a` of
+/// the tableau: writes its state `y + h Σ_j a_j k_j` into `state` and evaluates
+/// `k_i = f(t + c h, state)`; the slopes `k_0 … k_{i−1}` are already in `k`. A
+/// non-finite stage state is reported before `f` sees it.
+#[allow(clippy::too_many_arguments)]
+fn stage<S: OdeSystem>(
+    sys: &mut S,
+    (t, h): (f64, f64),
+    (c, a): (f64, &[f64]),
+    y: &[f64],
+    k: &mut [f64],
+    i: usize,
+    state: &mut [f64],
+    stats: &mut Stats,
+) -> StepOutcome {
+    let n = y.len();
+    let (done, rest) = k.split_at_mut(i * n);
+    combine(y, h, a, done, state);
+    let ti = t + c * h;
+    if let Some(index) = first_non_finite(state) {
+        return StepOutcome::NonFinite { t: ti, index };
+    }
+    match eval(sys, ti, state, &mut rest[..n], stats) {
+        Ok(()) => StepOutcome::Done,
+        Err(e) => StepOutcome::ModelFailed(e),
     }
 }
 
 /// One step of size `h` (s) from `(t, w.y)` with `k_1 = f(t, y)` already in `w.k`:
-/// evaluates the other stages and writes the new state into `w.y_new`. A non-finite
-/// stage state is reported before `f` sees it.
+/// evaluates the other stages and writes the new state into `w.y_new`.
 fn take_step<S: OdeSystem>(
     sys: &mut S,
     tab: &ExplicitTableau,
     (t, h): (f64, f64),
     w: &mut Workspace,
     stats: &mut Stats,
-) -> Result<StepOutcome, SolveError> {
-    let n = w.n;
+) -> StepOutcome {
     let s = tab.stages();
     for i in 1..s {
-        let (done, rest) = w.k.split_at_mut(i * n);
         // With FSAL the last stage is evaluated at the new state itself.
         let state = if tab.fsal && i == s - 1 {
             &mut w.y_new
         } else {
             &mut w.scratch
         };
-        combine(&w.y, h, tab.a[i], done, state);
-        let ti = t + tab.c[i] * h;
-        if let Some(index) = first_non_finite(state) {
-            return Ok(StepOutcome::NonFinite { t: ti, index });
-        }
-        if let Err(e) = eval(sys, ti, state, &mut rest[..n], stats) {
-            return Ok(StepOutcome::ModelFailed(e));
+        let outcome = stage(
+            sys,
+            (t, h),
+            (tab.c[i], tab.a[i]),
+            &w.y,
+            &mut w.k,
+            i,
+            state,
+            stats,
+        );
+        if !matches!(outcome, StepOutcome::Done) {
+            return outcome;
         }
     }
     if !tab.fsal {
         combine(&w.y, h, tab.b, &w.k, &mut w.y_new);
         if let Some(index) = first_non_finite(&w.y_new) {
-            return Ok(StepOutcome::NonFinite { t: t + h, index });
+            return StepOutcome::NonFinite { t: t + h, index };
         }
     }
-    Ok(StepOutcome::Done)
+    StepOutcome::Done
 }
 
-/// The continuous extension of `tab` at fraction `theta` of the step `ends`, whose
-/// stage slopes are `k`: cubic Hermite plus `θ²(1−θ)² h Σ d_i k_i` when the tableau
-/// has dense-output coefficients `d`.
-fn dense_output(
-    tab: &ExplicitTableau,
-    ends: &StepEnds<'_>,
-    k: &[f64],
-    theta: f64,
-    out: &mut [f64],
-) {
-    ends.hermite(theta, out);
-    if let Some(d) = tab.dense {
-        let n = out.len();
-        let th1 = 1.0 - theta;
-        let scale = theta * theta * th1 * th1 * ends.h;
-        for (m, o) in out.iter_mut().enumerate() {
-            let acc: f64 = d.iter().enumerate().map(|(j, dj)| dj * k[j * n + m]).sum();
-            *o += scale * acc;
-        }
+/// The error norm of the step of size `h` (s) just taken (≤ 1 passes): Hairer's
+/// weighted RMS norm `E` of `h Σ e_i k_i`; for a tableau with a second, lower-order
+/// estimate (DOP853) `E² / sqrt(E² + 0.01 E₃²)` with `E₃` the norm of
+/// `h Σ (b_i − b̂₃_i) k_i`. Non-finite when a slope is.
+fn error_norm(tab: &ExplicitTableau, tol: Tolerance, h: f64, w: &mut Workspace) -> f64 {
+    let n = w.n;
+    for (m, e) in w.scratch.iter_mut().enumerate() {
+        *e = increment(h, tab.e.iter().copied(), &w.k, n, m);
+    }
+    let err = tol.norm(&w.scratch, &w.y, &w.y_new);
+    if tab.b_hat_low.is_empty() {
+        return err;
+    }
+    for (m, e) in w.scratch.iter_mut().enumerate() {
+        let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh);
+        *e = increment(h, weights, &w.k, n, m);
+    }
+    let err_low = tol.norm(&w.scratch, &w.y, &w.y_new);
+    let denominator = err * err + 0.01 * err_low * err_low;
+    if denominator == 0.0 {
+        0.0
+    } else {
+        err * err / denominator.sqrt()
     }
 }
 
-/// Adaptive Dormand–Prince 5(4): PI step control on the embedded order-4 estimate,
-/// FSAL (6 evaluations of `f` per attempted step, plus 2 at the start), and the
-/// order-4 continuous extension at sample times inside accepted steps.
-pub(crate) fn dormand_prince<S, O>(
+/// Prepares the continuous extension of the accepted step of size `h` (s) from `t`:
+/// evaluates the extra stages of `dense` (if any) and the terms
+/// `F_{3+j} = h Σ_i d[j][i] k_i` into `w.cont`.
+fn prepare_dense<S: OdeSystem>(
     sys: &mut S,
+    tab: &ExplicitTableau,
+    dense: &DenseOutput,
+    (t, h): (f64, f64),
+    w: &mut Workspace,
+    stats: &mut Stats,
+) -> StepOutcome {
+    let (n, s) = (w.n, tab.stages());
+    for (x, (&c, &a)) in dense.c.iter().zip(dense.a).enumerate() {
+        let outcome = stage(
+            sys,
+            (t, h),
+            (c, a),
+            &w.y,
+            &mut w.k,
+            s + x,
+            &mut w.scratch,
+            stats,
+        );
+        if !matches!(outcome, StepOutcome::Done) {
+            return outcome;
+        }
+    }
+    for (row, d) in w.cont.chunks_exact_mut(n).zip(dense.d) {
+        for (m, f) in row.iter_mut().enumerate() {
+            *f = increment(h, d.iter().copied(), &w.k, n, m);
+        }
+    }
+    StepOutcome::Done
+}
+
+/// An adaptive FSAL pair given by `tab`: PI step control on the embedded estimate
+/// (exponent from `tab.error_order`, gain `tab.pi_beta`), `s − 1` evaluations of
+/// `f` per attempted step plus 2 at the start, and the pair's continuous extension
+/// at sample times inside accepted steps (its extra stages, if any, evaluated only
+/// for steps with such a sample; a trial state there the model cannot evaluate
+/// makes the step a rejected one).
+pub(crate) fn adaptive<S, O>(
+    sys: &mut S,
+    tab: &ExplicitTableau,
     p: &Problem<'_>,
     tol: Tolerance,
     samples: &mut Samples<'_, O>,
@@ -148,9 +229,9 @@ where
     S: OdeSystem,
     O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
 {
-    let tab = &DORMAND_PRINCE;
+    debug_assert!(tab.fsal && !tab.e.is_empty());
     let s = tab.stages();
-    let mut w = Workspace::new(p.y0, s);
+    let mut w = Workspace::new(p.y0, tab);
     let n = w.n;
     let mut stats = Stats::default();
     samples.serve_start(sys, p.t0, p.y0)?;
@@ -164,64 +245,66 @@ where
         (&mut w.scratch, &mut w.out),
         &mut stats,
     )?;
-    let mut control = StepController::new(tab.embedded_order, PI_BETA);
+    let mut control = StepController::new(tab.error_order, tab.pi_beta);
     let mut t = p.t0;
     // The last model failure of a rejected step, reported if the step size underflows.
     let mut model_failure: Option<SolveError> = None;
     loop {
         let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
         h = h_try;
-        let err = match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
+        let err = match take_step(sys, tab, (t, h), &mut w, &mut stats) {
             StepOutcome::NonFinite { .. } => f64::NAN,
             StepOutcome::ModelFailed(e) => {
                 model_failure = Some(e);
                 f64::NAN
             }
-            StepOutcome::Done => {
-                for (m, e) in w.scratch.iter_mut().enumerate() {
-                    let acc: f64 = tab
-                        .b
-                        .iter()
-                        .zip(tab.b_hat)
-                        .enumerate()
-                        .map(|(j, (b, bh))| (b - bh) * w.k[j * n + m])
-                        .sum();
-                    *e = h * acc;
-                }
-                tol.norm(&w.scratch, &w.y, &w.y_new)
-            }
+            StepOutcome::Done => error_norm(tab, tol, h, &mut w),
         };
-        match control.judge(err, h) {
+        let h_new = match control.judge(err, h) {
             Verdict::Reject(h_new) => {
                 stats.rejected += 1;
                 h = h_new;
+                continue;
             }
-            Verdict::Accept(h_new) => {
-                stats.steps += 1;
-                model_failure = None;
-                let t_new = if last { p.t_end } else { t + h };
-                accept(sys, t_new, &w.y_new)?;
-                let ends = StepEnds {
-                    t0: t,
-                    h,
-                    y0: &w.y,
-                    y1: &w.y_new,
-                    f0: &w.k[..n],
-                    f1: &w.k[(s - 1) * n..],
-                };
-                let k = &w.k;
-                samples.serve(sys, t_new, &w.y_new, &mut w.out, |ts, out| {
-                    dense_output(tab, &ends, k, ends.theta(ts), out);
-                })?;
-                if last {
-                    return Ok(stats);
+            Verdict::Accept(h_new) => h_new,
+        };
+        let t_new = if last { p.t_end } else { t + h };
+        if let Some(dense) = tab.dense.as_ref().filter(|_| samples.pending_before(t_new)) {
+            match prepare_dense(sys, tab, dense, (t, h), &mut w, &mut stats) {
+                StepOutcome::Done => {}
+                failed => {
+                    if let StepOutcome::ModelFailed(e) = failed {
+                        model_failure = Some(e);
+                    }
+                    stats.rejected += 1;
+                    control.note_failure();
+                    h *= NON_FINITE_CUT;
+                    continue;
                 }
-                std::mem::swap(&mut w.y, &mut w.y_new);
-                w.k.copy_within((s - 1) * n.., 0);
-                t = t_new;
-                h = h_new;
             }
         }
+        stats.steps += 1;
+        model_failure = None;
+        accept(sys, t_new, &w.y_new)?;
+        let ends = StepEnds {
+            t0: t,
+            h,
+            y0: &w.y,
+            y1: &w.y_new,
+            f0: &w.k[..n],
+            f1: &w.k[(s - 1) * n..s * n],
+        };
+        let cont = &w.cont;
+        samples.serve(sys, t_new, &w.y_new, &mut w.out, |ts, out| {
+            ends.continuous(ends.theta(ts), cont, out);
+        })?;
+        if last {
+            return Ok(stats);
+        }
+        std::mem::swap(&mut w.y, &mut w.y_new);
+        w.k.copy_within((s - 1) * n..s * n, 0);
+        t = t_new;
+        h = h_new;
     }
 }
 
@@ -251,7 +334,7 @@ where
     // In range: 1 <= steps <= max_steps.
     let steps = steps as u64;
     let tab = &RK4;
-    let mut w = Workspace::new(p.y0, tab.stages());
+    let mut w = Workspace::new(p.y0, tab);
     let n = w.n;
     let mut stats = Stats::default();
     samples.serve_start(sys, p.t0, p.y0)?;
@@ -267,7 +350,7 @@ where
         if !have_f0 {
             eval(sys, t, &w.y, &mut w.k[..n], &mut stats)?;
         }
-        match take_step(sys, tab, (t, h), &mut w, &mut stats)? {
+        match take_step(sys, tab, (t, h), &mut w, &mut stats) {
             StepOutcome::NonFinite { t, index } => return Err(SolveError::NonFinite { t, index }),
             StepOutcome::ModelFailed(e) => return Err(e),
             StepOutcome::Done => {}

@@ -1,10 +1,16 @@
 //! Time integrators for `y' = f(t, y)`, each usable for any case.
 //!
-//! | method | kind | order | step control | output at sample times |
-//! |---|---|---|---|---|
-//! | [`Method::DormandPrince`] | explicit Runge–Kutta pair | 5(4) | PI controller on the embedded error | Dormand–Prince continuous extension (order 4) |
-//! | [`Method::Rk4`] | classic explicit Runge–Kutta | 4 | fixed step | cubic Hermite from the step's end values and slopes (order 4) |
-//! | [`Method::Sdirk4`] | L-stable singly diagonally implicit RK (Hairer–Wanner) | 4(3) | embedded error, simplified Newton | cubic Hermite (order 4) |
+//! | method | kind | order | evaluations of `f` per step | step control | output at sample times |
+//! |---|---|---|---|---|---|
+//! | [`Method::DormandPrince`] | explicit Runge–Kutta pair, FSAL (Dormand & Prince 1980, DOPRI5) | 5(4) | 6 | PI controller on the embedded error | Dormand–Prince continuous extension (order 4) |
+//! | [`Method::Tsit5`] | explicit Runge–Kutta pair, FSAL (Tsitouras 2011) | 5(4) | 6 | PI controller on the embedded error | Tsitouras's free continuous extension (order 4) |
+//! | [`Method::Dop853`] | explicit Runge–Kutta pair, FSAL (Dormand & Prince; Hairer's DOP853) | 8(5,3) | 12, +3 for a step with a sample inside | error from the 5th- and 3rd-order estimates combined (behaves like h⁸) | DOP853 continuous extension (order 7) |
+//! | [`Method::Rk4`] | classic explicit Runge–Kutta | 4 | 4 | fixed step | cubic Hermite from the step's end values and slopes (order 4) |
+//! | [`Method::Sdirk4`] | L-stable singly diagonally implicit RK (Hairer–Wanner) | 4(3) | Newton iterations, Jacobians | embedded error, simplified Newton | cubic Hermite (order 4) |
+//!
+//! The three explicit pairs are one engine (`explicit.rs`) driven by tableau data
+//! (`tableau.rs`, checked against the order conditions); the step-size controller
+//! (`control.rs`) takes its exponent from the order of each pair's error estimate.
 //!
 //! Every method calls the observer exactly once per requested sample time, in order,
 //! with the state at that time (never snapped to a step end), and reports
@@ -35,6 +41,24 @@ pub enum Method {
     /// Adaptive Dormand–Prince 5(4) with dense output.
     /// `rtol` is relative, `atol` absolute in the units of each state component.
     DormandPrince {
+        /// Relative tolerance (dimensionless).
+        rtol: f64,
+        /// Absolute tolerance (state units).
+        atol: f64,
+    },
+    /// Adaptive Tsitouras 5(4) (Tsit5) with its order-4 continuous extension: the
+    /// cost per step of [`Method::DormandPrince`] with smaller error coefficients.
+    /// `rtol` is relative, `atol` absolute in the units of each state component.
+    Tsit5 {
+        /// Relative tolerance (dimensionless).
+        rtol: f64,
+        /// Absolute tolerance (state units).
+        atol: f64,
+    },
+    /// Adaptive Dormand–Prince 8(5,3) as in Hairer's DOP853, with its order-7
+    /// continuous extension: for tight tolerances.
+    /// `rtol` is relative, `atol` absolute in the units of each state component.
+    Dop853 {
         /// Relative tolerance (dimensionless).
         rtol: f64,
         /// Absolute tolerance (state units).
@@ -164,7 +188,8 @@ mod validate;
 /// * [`SolveError::StepSizeTooSmall`] when an adaptive step falls below `16 ε |t|`.
 /// * [`SolveError::NonFinite`] when the state of [`Method::Rk4`] (or an SDIRK4
 ///   Jacobian) becomes NaN or infinite; the adaptive methods instead reject such
-///   steps and cut the step size by 10.
+///   steps and cut the step size by 10 (for DOP853 also when an extra stage of its
+///   continuous extension is not finite).
 pub fn integrate<S, O>(
     sys: &mut S,
     settings: &SolverSettings,
@@ -205,19 +230,16 @@ where
         max_steps: settings.max_steps,
         max_step: settings.max_step,
     };
-    match settings.method {
-        Method::DormandPrince { rtol, atol } => explicit::dormand_prince(
-            sys,
-            &problem,
-            control::Tolerance { rtol, atol },
-            &mut samples,
-        ),
-        Method::Rk4 { step } => explicit::rk4(sys, &problem, step, &mut samples),
-        Method::Sdirk4 { rtol, atol } => sdirk::sdirk4(
-            sys,
-            &problem,
-            control::Tolerance { rtol, atol },
-            &mut samples,
-        ),
-    }
+    let pair = |tableau, rtol, atol| (tableau, control::Tolerance { rtol, atol });
+    let (tableau, tol) = match settings.method {
+        Method::DormandPrince { rtol, atol } => pair(&tableau::DORMAND_PRINCE, rtol, atol),
+        Method::Tsit5 { rtol, atol } => pair(&tableau::TSITOURAS5, rtol, atol),
+        Method::Dop853 { rtol, atol } => pair(&tableau::DOP853, rtol, atol),
+        Method::Rk4 { step } => return explicit::rk4(sys, &problem, step, &mut samples),
+        Method::Sdirk4 { rtol, atol } => {
+            let tol = control::Tolerance { rtol, atol };
+            return sdirk::sdirk4(sys, &problem, tol, &mut samples);
+        }
+    };
+    explicit::adaptive(sys, tableau, &problem, tol, &mut samples)
 }

@@ -96,14 +96,35 @@ impl StepEnds<'_> {
     /// `y0 + θΔ + θ(1−θ)(h f0 − Δ) + θ²(1−θ)(2Δ − h f0 − h f1)`, `Δ = y1 − y0`
     /// (HNW I §II.6). Exact for cubics; local error O(h⁴).
     pub fn hermite(&self, theta: f64, out: &mut [f64]) {
+        self.continuous(theta, &[], out);
+    }
+
+    /// Writes a continuous extension in Hairer's nested form at fraction `theta`
+    /// into `out` (HNW I §II.6; `CONTD5`, `CONTD8`): with `θ₁ = 1 − θ`,
+    /// `y0 + θ(F0 + θ₁(F1 + θ(F2 + θ₁(F3 + θ(F4 + …)))))`, where `F0 = Δ`,
+    /// `F1 = h f0 − Δ`, `F2 = 2Δ − h f0 − h f1` (the cubic Hermite part) and the
+    /// higher terms `F3, F4, …` are the rows of `higher` (row-major, each of the
+    /// state's length; state units). No higher terms: [`StepEnds::hermite`].
+    pub fn continuous(&self, theta: f64, higher: &[f64], out: &mut [f64]) {
         let th1 = 1.0 - theta;
         let h = self.h;
+        let n = out.len();
+        let rows = higher.len().checked_div(n).unwrap_or(0);
         for (i, o) in out.iter_mut().enumerate() {
             let delta = self.y1[i] - self.y0[i];
             let hf0 = h * self.f0[i];
             let hf1 = h * self.f1[i];
-            *o = self.y0[i]
-                + theta * (delta + th1 * (hf0 - delta + theta * (2.0 * delta - hf0 - hf1)));
+            let hermite = [delta, hf0 - delta, 2.0 * delta - hf0 - hf1];
+            let mut acc = 0.0;
+            for j in (0..3 + rows).rev() {
+                let f = if j < 3 {
+                    hermite[j]
+                } else {
+                    higher[(j - 3) * n + i]
+                };
+                acc = (acc + f) * if j % 2 == 0 { theta } else { th1 };
+            }
+            *o = self.y0[i] + acc;
         }
     }
 }

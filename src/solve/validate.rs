@@ -22,7 +22,10 @@ fn positive_finite(field: &str, value: f64) -> Result<(), SolveError> {
 /// Tolerances and step sizes: positive and finite (`max_step` may be infinite).
 pub(crate) fn settings(s: &SolverSettings) -> Result<(), SolveError> {
     match s.method {
-        Method::DormandPrince { rtol, atol } | Method::Sdirk4 { rtol, atol } => {
+        Method::DormandPrince { rtol, atol }
+        | Method::Tsit5 { rtol, atol }
+        | Method::Dop853 { rtol, atol }
+        | Method::Sdirk4 { rtol, atol } => {
             positive_finite("rtol", rtol)?;
             positive_finite("atol", atol)?;
         }

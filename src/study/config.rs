@@ -161,7 +161,8 @@ pub struct GeometrySection {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct SolverSection {
-    /// `dopri5` (default), `rk4` or `sdirk4`.
+    /// `dopri5` (default), `tsit5`, `dop853` (the adaptive explicit pairs, with
+    /// `rtol`, `atol`), `rk4` (with `step`) or `sdirk4` (with `rtol`, `atol`).
     pub method: Option<S<String>>,
     pub rtol: Option<S<Scalar>>,
     pub atol: Option<S<Scalar>>,

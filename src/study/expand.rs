@@ -808,6 +808,8 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
     let atol = positive(&s.atol, Dimension::Dimensionless, "solver.atol", 1e-12)?;
     let method = match s.method.as_ref().map(|m| m.value.as_str()) {
         None | Some("dopri5") => Method::DormandPrince { rtol, atol },
+        Some("tsit5") => Method::Tsit5 { rtol, atol },
+        Some("dop853") => Method::Dop853 { rtol, atol },
         Some("sdirk4") => Method::Sdirk4 { rtol, atol },
         Some("rk4") => Method::Rk4 {
             step: positive(&s.step, Dimension::Time, "solver.step", 20e-6)?,
@@ -817,7 +819,7 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
             return Err(ctx.err(
                 m,
                 "solver.method",
-                format!("`{other}` is not allowed: dopri5, rk4 or sdirk4"),
+                format!("`{other}` is not allowed: dopri5, tsit5, dop853, rk4 or sdirk4"),
             ));
         }
     };

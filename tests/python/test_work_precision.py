@@ -33,7 +33,7 @@ def test_errors_fall_as_dopri5_tightens(ds):
 
 def test_every_method_is_measured_with_its_cost(ds):
     pts = work_precision.points(ds, cost="rhs_evals")
-    assert set(pts) == {"dopri5", "sdirk4", "rk4"}
+    assert set(pts) == {"dopri5", "tsit5", "dop853", "sdirk4", "rk4"}
     for _, costs, errs in pts.values():
         assert np.all(costs > 0) and np.all(np.isfinite(errs))
 
