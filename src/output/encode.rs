@@ -25,10 +25,10 @@ use super::layout::Storage;
 
 /// Byte planes whose estimated entropy (bits per byte, of at most [`SAMPLE`] bytes)
 /// exceeds this are stored without compression: deflate would gain under ~6 % there.
-pub const STORE_ABOVE_BITS: f64 = 7.5;
+const STORE_ABOVE_BITS: f64 = 7.5;
 
 /// Bytes of a plane sampled, evenly spaced, to estimate its entropy.
-const SAMPLE: usize = 2048;
+const SAMPLE: usize = 1024;
 
 /// Largest payload of one stored deflate block (bytes).
 const STORED_MAX: usize = u16::MAX as usize;
@@ -105,20 +105,20 @@ impl ChunkEncoder {
         let n = values.len();
         self.shuffled.resize(n * E, 0);
         shuffle(values, bytes, &mut self.shuffled);
-        let planes: Vec<&[u8]> = if n == 0 {
+        // Whether to deflate each byte plane, decided once per plane.
+        let deflated: Vec<bool> = if n == 0 {
             Vec::new()
         } else {
-            self.shuffled.chunks_exact(n).collect()
+            self.shuffled.chunks_exact(n).map(compressible).collect()
         };
         out.extend_from_slice(&zlib_header(self.storage.deflate_level));
         let mut first = 0;
-        while first < planes.len() {
-            let compress = compressible(planes[first]);
-            let last = (first + 1..planes.len())
-                .find(|&j| compressible(planes[j]) != compress)
-                .unwrap_or(planes.len());
+        while first < deflated.len() {
+            let last = (first + 1..deflated.len())
+                .find(|&j| deflated[j] != deflated[first])
+                .unwrap_or(deflated.len());
             let run = &self.shuffled[first * n..last * n];
-            if compress {
+            if deflated[first] {
                 deflate_run(deflate, run, out);
             } else {
                 stored_blocks(run, out);
@@ -131,22 +131,23 @@ impl ChunkEncoder {
     }
 }
 
-/// HDF5's shuffle: byte `j` of element `i` goes to `dst[j * n + i]` (`n` elements).
+/// HDF5's shuffle: byte `j` of element `i` goes to `dst[j * n + i]` (`n` elements of
+/// `E ≤ 8` bytes).
 fn shuffle<const E: usize>(values: &[f64], bytes: impl Fn(f64) -> [u8; E], dst: &mut [u8]) {
     const BLOCK: usize = 8;
     let n = values.len();
     let whole = n - n % BLOCK;
     for (k, block) in values[..whole].chunks_exact(BLOCK).enumerate() {
-        // Transpose a block of 8 elements in registers, then write 8 bytes per plane.
-        let mut t = [[0u8; BLOCK]; E];
-        for (m, &v) in block.iter().enumerate() {
-            for (plane, b) in t.iter_mut().zip(bytes(v)) {
-                plane[m] = b;
-            }
+        // Eight elements as the rows of an 8×8 byte matrix; its columns are the planes.
+        let mut rows = [0u64; BLOCK];
+        for (r, &v) in rows.iter_mut().zip(block) {
+            let mut b = [0u8; 8];
+            b[..E].copy_from_slice(&bytes(v));
+            *r = u64::from_le_bytes(b);
         }
-        for (j, plane) in t.iter().enumerate() {
+        for (j, plane) in transpose_bytes(rows).iter().take(E).enumerate() {
             let at = j * n + k * BLOCK;
-            dst[at..at + BLOCK].copy_from_slice(plane);
+            dst[at..at + BLOCK].copy_from_slice(&plane.to_le_bytes());
         }
     }
     for (i, &v) in values.iter().enumerate().skip(whole) {
@@ -154,6 +155,25 @@ fn shuffle<const E: usize>(values: &[f64], bytes: impl Fn(f64) -> [u8; E], dst: 
             dst[j * n + i] = b;
         }
     }
+}
+
+/// Transposes an 8×8 byte matrix held as eight little-endian rows: byte `j` of row `m`
+/// becomes byte `m` of row `j` (three rounds of masked swaps of 4-, 2- and 1-byte
+/// blocks, all in registers).
+fn transpose_bytes(mut a: [u64; 8]) -> [u64; 8] {
+    for (step, mask, pairs) in [
+        (32, 0x0000_0000_FFFF_FFFF_u64, [0, 1, 2, 3]),
+        (16, 0x0000_FFFF_0000_FFFF, [0, 1, 4, 5]),
+        (8, 0x00FF_00FF_00FF_00FF, [0, 2, 4, 6]),
+    ] {
+        let distance = step / 8;
+        for i in pairs {
+            let t = ((a[i] >> step) ^ a[i + distance]) & mask;
+            a[i] ^= t << step;
+            a[i + distance] ^= t;
+        }
+    }
+    a
 }
 
 /// Whether deflate is worth running on a byte plane: its byte entropy, estimated on
@@ -356,6 +376,25 @@ mod tests {
             "a constant row deflates to little: {}",
             nan.len()
         );
+    }
+
+    #[test]
+    fn shuffle_puts_byte_j_of_element_i_at_j_n_plus_i() {
+        for n in [0, 1, 7, 8, 9, 64, 67] {
+            let values: Vec<f64> = (0..n).map(|i| (i as f64 + 0.1).exp()).collect();
+            let mut dst = vec![0u8; 8 * n];
+            shuffle(&values, f64::to_ne_bytes, &mut dst);
+            let mut dst32 = vec![0u8; 4 * n];
+            shuffle(&values, |v| (v as f32).to_ne_bytes(), &mut dst32);
+            for (i, v) in values.iter().enumerate() {
+                for (j, b) in v.to_ne_bytes().into_iter().enumerate() {
+                    assert_eq!(dst[j * n + i], b, "n {n} element {i} byte {j}");
+                }
+                for (j, b) in (*v as f32).to_ne_bytes().into_iter().enumerate() {
+                    assert_eq!(dst32[j * n + i], b, "f32 n {n} element {i} byte {j}");
+                }
+            }
+        }
     }
 
     #[test]

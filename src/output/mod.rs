@@ -53,7 +53,7 @@ pub mod spectrum;
 mod writer;
 
 pub use dimension_scales::ScaleError;
-pub use encode::{ChunkEncoder, STORE_ABOVE_BITS};
+pub use encode::ChunkEncoder;
 pub use error::StudyFileError;
 pub use layout::{
     provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
