@@ -117,6 +117,10 @@ struct RunArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// After the run, print where the CPU time went (simulation, spectra, encoding,
+    /// journal, HDF5) and whether the workers ever waited for the writer.
+    #[arg(long)]
+    timings: bool,
 }
 
 /// Parses the command line, runs the command and maps the outcome to an exit code.
@@ -200,6 +204,9 @@ fn run_command(args: RunArgs) -> Result<u8> {
         quiet: args.quiet,
     };
     let summary = run::run(&study, &opts)?;
+    if args.timings {
+        eprintln!("{}", summary.stats);
+    }
     if !args.quiet {
         eprintln!(
             "studyrun: {} cases into {} in {:.2} s ({} ok, {} failed{})",

@@ -9,8 +9,8 @@ use std::time::Instant;
 use hdf5::filters::Filter;
 use studyrun::output::spectrum::{frequencies, SpectrumPlan, Window};
 use studyrun::output::{
-    provenance, AttrValue, CaseRecord, Layout, Param, ParamValues, Status, Storage, StudyFileError,
-    StudyReader, StudyWriter, VarSpec,
+    provenance, AttrValue, CaseRecord, ChunkEncoder, EncodedRecord, Layout, Param, ParamValues,
+    Status, Storage, StudyFileError, StudyReader, StudyWriter, VarSpec,
 };
 use studyrun::simulate::CHANNELS;
 
@@ -521,6 +521,180 @@ fn synthetic_file_for_python() {
         raw as f64 / stored as f64,
         path.display()
     );
+}
+
+/// Rows with every kind of value: a noisy smooth signal, integers, NaN, infinities,
+/// signed zeros, subnormals and extremes, so that chunks mix stored and deflated
+/// byte planes.
+fn awkward_rows(n_rows: usize, n: usize) -> Vec<Vec<f64>> {
+    let mut state = 0x853c_49e6_748f_ea9b_u64;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let specials = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        -0.0,
+        f64::MIN_POSITIVE / 3.0,
+        f64::MAX,
+        f64::MIN,
+    ];
+    (0..n_rows)
+        .map(|r| {
+            (0..n)
+                .map(|k| match r % 3 {
+                    0 => 1e3 * (k as f64 * 2e-3 * (r + 1) as f64).sin() + 1e-4 * noise(),
+                    1 => (k % 11) as f64,
+                    _ if k % 97 == 0 => specials[k / 97 % specials.len()],
+                    _ => noise() * 10f64.powi((k % 40) as i32 - 20),
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A one-variable study file of `rows` written through [`StudyWriter::write_encoded`]
+/// with chunks a [`ChunkEncoder`] made (as the workers do).
+fn write_encoded_file(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
+    let n = rows[0].len();
+    let layout = Layout {
+        case_ids: (0..rows.len() as u64).collect(),
+        times: (0..n).map(|k| k as f64 * 1e-3).collect(),
+        frequencies: vec![],
+        reference_ids: vec![0],
+        series: vec![VarSpec::new("x", "m", "awkward values")],
+        spectra: vec![],
+        metrics: vec![VarSpec::new("m", "1", "a metric")],
+        parameters: vec![],
+        reference_parameters: vec![],
+        reference_series: vec![],
+        reference_index: vec![0; rows.len()],
+        attributes: vec![],
+        storage,
+    };
+    let mut writer = StudyWriter::create(path, &layout).unwrap();
+    let mut encoder = ChunkEncoder::new(storage);
+    for (row, values) in rows.iter().enumerate().rev() {
+        let mut chunk = Vec::new();
+        encoder.encode(values, &mut chunk);
+        writer
+            .write_encoded(
+                row,
+                &EncodedRecord {
+                    series: &[&chunk],
+                    spectra: &[],
+                    metrics: &[row as f64],
+                    status: Status::Ok,
+                    message: "",
+                },
+            )
+            .unwrap();
+    }
+    writer.finish().unwrap();
+}
+
+/// The same rows written by HDF5's own filter pipeline (shuffle + deflate, or none).
+fn write_through_hdf5_filters(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
+    let file = hdf5::File::create(path).unwrap();
+    let n = rows[0].len();
+    let mut builder = file
+        .new_dataset::<f64>()
+        .chunk((1, n))
+        .shape((rows.len(), n));
+    if storage.deflate_level > 0 {
+        builder = builder.shuffle().deflate(storage.deflate_level);
+    }
+    builder
+        .create("x")
+        .unwrap()
+        .write_raw(&rows.concat())
+        .unwrap();
+}
+
+fn stored_values(storage: Storage, rows: &[Vec<f64>]) -> Vec<Vec<u64>> {
+    rows.iter()
+        .map(|r| {
+            r.iter()
+                .map(|&v| {
+                    if storage.float32 {
+                        f64::from(v as f32).to_bits()
+                    } else {
+                        v.to_bits()
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Direct chunk writes read back bit for bit, through the Rust reader and through
+/// HDF5's own inflate and unshuffle, and equal what HDF5's filter pipeline stores;
+/// the dataset keeps the standard shuffle + deflate filters. Leaves
+/// `target/test-files/direct_chunks/` (files and the expected values as raw
+/// little-endian f64) for `tests/python/test_direct_chunks.py`.
+#[test]
+fn direct_chunks_read_like_hdf5_filtered_chunks() {
+    let target = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .parent()
+        .map_or_else(|| PathBuf::from("target"), Path::to_path_buf);
+    let dir = target.join("test-files").join("direct_chunks");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rows = awkward_rows(9, 3001);
+    for (name, float32, level) in [
+        ("f64_deflate1", false, 1),
+        ("f64_deflate9", false, 9),
+        ("f64_plain", false, 0),
+        ("f32_deflate4", true, 4),
+    ] {
+        let storage = Storage {
+            float32,
+            deflate_level: level,
+        };
+        let path = dir.join(format!("{name}.h5"));
+        write_encoded_file(&path, storage, &rows);
+        let want = stored_values(storage, &rows);
+        let reader = StudyReader::open(&path).unwrap();
+        for (row, w) in want.iter().enumerate() {
+            let case = reader.read_case(row).unwrap();
+            assert_eq!(&bits(&case.series[0]), w, "{name} row {row}");
+            assert_eq!(case.metrics, [row as f64]);
+        }
+        let file = hdf5::File::open(&path).unwrap();
+        let ds = file.dataset("x").unwrap();
+        let expected_filters = if level > 0 {
+            vec![Filter::Shuffle, Filter::Deflate(level)]
+        } else {
+            vec![]
+        };
+        assert_eq!(ds.filters(), expected_filters, "{name}");
+        let all: Vec<u64> = ds
+            .read_raw::<f64>()
+            .unwrap()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        assert_eq!(all, want.concat(), "{name}: HDF5's read_raw");
+        if !float32 {
+            let reference = dir.join(format!("{name}_hdf5_filters.h5"));
+            write_through_hdf5_filters(&reference, storage, &rows);
+            let theirs = hdf5::File::open(&reference).unwrap().dataset("x").unwrap();
+            let theirs: Vec<u64> = theirs
+                .read_raw::<f64>()
+                .unwrap()
+                .iter()
+                .map(|v| v.to_bits())
+                .collect();
+            assert_eq!(all, theirs, "{name}: same values as HDF5's own filters");
+            std::fs::remove_file(&reference).unwrap();
+        }
+        let raw: Vec<u8> = want.concat().iter().flat_map(|b| b.to_le_bytes()).collect();
+        std::fs::write(dir.join(format!("{name}.f64")), raw).unwrap();
+    }
+    println!("STUDYRUN_CHUNKS_DIR={}", dir.display());
 }
 
 /// Write throughput of a paper-sized study: 32 cases × 12 series of 20 001 samples and

@@ -3,7 +3,7 @@
 //! dataset. A 1-D coordinate variable is made a scale with [`set_scale`] and attached to
 //! each dimension of each data variable along it with [`attach_scale`].
 //!
-//! The only `unsafe` code of the output module lives here.
+//! `unsafe` code of the output module lives here and in `direct_chunk`.
 
 use std::ffi::{c_char, c_int, c_uint, CString};
 

@@ -33,8 +33,10 @@
 //!
 //! Storage: `[case, *]` and `[reference, time]` arrays are chunked one row per chunk
 //! (chunk shape `(1, len)`), so writing or reading a case touches one chunk per
-//! variable; with a deflate level above 0 they pass through shuffle then deflate,
-//! with level 0 through no filter. 1-D variables are contiguous and uncompressed.
+//! variable; with a deflate level above 0 they carry the shuffle and deflate (gzip)
+//! filters, with level 0 none. Rows are encoded by a [`ChunkEncoder`] (on any thread)
+//! and written with HDF5's direct chunk write; readers inflate them like chunks HDF5
+//! deflated itself. 1-D variables are contiguous and uncompressed.
 //! Link and attribute creation order are tracked, as netCDF-4 does.
 //!
 //! [`spectrum`] computes the one-sided amplitude spectra stored in the file.
@@ -42,6 +44,8 @@
 mod attributes;
 mod datasets;
 mod dimension_scales;
+mod direct_chunk;
+mod encode;
 mod error;
 mod layout;
 mod reader;
@@ -49,10 +53,11 @@ pub mod spectrum;
 mod writer;
 
 pub use dimension_scales::ScaleError;
+pub use encode::ChunkEncoder;
 pub use error::StudyFileError;
 pub use layout::{
     provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
     ERROR_MESSAGE, FREQUENCY, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
 };
 pub use reader::{CaseData, StudyReader};
-pub use writer::{CaseRecord, StudyWriter};
+pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

@@ -10,6 +10,8 @@ use hdf5::{Dataset, File, H5Type};
 use super::attributes;
 use super::datasets::{check_row, RowDatasets};
 use super::dimension_scales::{attach_scale, set_scale};
+use super::direct_chunk::{chunked_by_row, write_row_chunk};
+use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
@@ -22,12 +24,16 @@ use super::reader::read_layout;
 /// An empty `series`, `spectra` or `metrics` list leaves those variables as they are
 /// (NaN in a new file), e.g. for a failed case; a non-empty one must hold every
 /// variable of the layout, in layout order, each of the dimension's length.
-#[derive(Debug, Clone, Copy)]
-pub struct CaseRecord<'a> {
-    /// One slice per [`Layout::series`], `times.len()` values each (their units).
-    pub series: &'a [&'a [f64]],
-    /// One slice per [`Layout::spectra`], `frequencies.len()` values each.
-    pub spectra: &'a [&'a [f64]],
+///
+/// `Row` is `[f64]` for values ([`CaseRecord`], [`StudyWriter::write_case`]) or `[u8]`
+/// for rows already encoded as stored chunks by a [`ChunkEncoder`] of the file's
+/// storage ([`EncodedRecord`], [`StudyWriter::write_encoded`]).
+#[derive(Debug)]
+pub struct Record<'a, Row: ?Sized> {
+    /// One row per [`Layout::series`], `times.len()` values each (their units).
+    pub series: &'a [&'a Row],
+    /// One row per [`Layout::spectra`], `frequencies.len()` values each.
+    pub spectra: &'a [&'a Row],
     /// One value per [`Layout::metrics`].
     pub metrics: &'a [f64],
     /// The case's state.
@@ -36,19 +42,69 @@ pub struct CaseRecord<'a> {
     pub message: &'a str,
 }
 
+impl<Row: ?Sized> Clone for Record<'_, Row> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<Row: ?Sized> Copy for Record<'_, Row> {}
+
+/// A case whose series and spectra are values (f64, in their units).
+pub type CaseRecord<'a> = Record<'a, [f64]>;
+
+/// A case whose series and spectra are stored chunk bytes made by
+/// [`ChunkEncoder::encode`] for the file's [`Storage`](super::Storage), e.g. on a
+/// worker thread.
+pub type EncodedRecord<'a> = Record<'a, [u8]>;
+
+/// A row the writer accepts: values, or the bytes of a stored chunk.
+trait Row {
+    /// Why the row cannot be a row of `len` elements stored as `encoder` stores them.
+    fn misfit(&self, len: usize, encoder: &ChunkEncoder) -> Option<String>;
+}
+
+impl Row for [f64] {
+    fn misfit(&self, len: usize, _: &ChunkEncoder) -> Option<String> {
+        (self.len() != len).then(|| format!("{} values, the dimension has {len}", self.len()))
+    }
+}
+
+impl Row for [u8] {
+    fn misfit(&self, len: usize, encoder: &ChunkEncoder) -> Option<String> {
+        let storage = encoder.storage();
+        let raw = len * if storage.float32 { 4 } else { 8 };
+        if storage.deflate_level == 0 && self.len() != raw {
+            Some(format!(
+                "an unfiltered chunk of {} bytes, the row has {raw}",
+                self.len()
+            ))
+        } else if storage.deflate_level > 0 && self.is_empty() {
+            Some("an empty chunk, a deflated row is never empty".to_owned())
+        } else {
+            None
+        }
+    }
+}
+
 /// Writes a study file: [`StudyWriter::create`] lays out every variable and writes
-/// coordinates, parameters and attributes; [`StudyWriter::write_case`] and
-/// [`StudyWriter::write_reference`] fill rows in any order. Rows never written keep
-/// NaN (series, spectra, metrics), status 0 (pending) and an empty message.
+/// coordinates, parameters and attributes; [`StudyWriter::write_case`],
+/// [`StudyWriter::write_encoded`] and [`StudyWriter::write_reference`] fill rows in any
+/// order. Rows never written keep NaN (series, spectra, metrics), status 0 (pending)
+/// and an empty message.
 ///
-/// Scratch for float32 conversion is allocated once, at creation or opening.
+/// Series, spectra and reference series are written with HDF5's direct chunk write:
+/// a row is one chunk, encoded (float32 conversion, shuffle, deflate) by a
+/// [`ChunkEncoder`], here or by the caller, and copied into the file as it is.
 pub struct StudyWriter {
     path: PathBuf,
     file: File,
     layout: Layout,
     rows: RowDatasets,
-    /// float32 staging buffer, `max(times, frequencies)` long when storing float32.
-    scratch: Vec<f32>,
+    /// Encodes rows handed over as values.
+    encoder: ChunkEncoder,
+    /// The chunk being written from values, reused.
+    chunk: Vec<u8>,
 }
 
 impl std::fmt::Debug for StudyWriter {
@@ -84,7 +140,7 @@ impl StudyWriter {
         .build()?;
         file.flush().at(&path, "/")?;
         let rows = RowDatasets::open(&file, layout, &path)?;
-        Ok(Self::from_parts(path, file, layout.clone(), rows))
+        Self::from_parts(path, file, layout.clone(), rows)
     }
 
     /// Opens an existing study file to write more rows into it (to resume a study).
@@ -94,22 +150,40 @@ impl StudyWriter {
         let file = File::open_rw(&path).at(&path, "/")?;
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
-        Ok(Self::from_parts(path, file, layout, rows))
+        Self::from_parts(path, file, layout, rows)
     }
 
-    fn from_parts(path: PathBuf, file: File, layout: Layout, rows: RowDatasets) -> Self {
-        let scratch_len = if layout.storage.float32 {
-            layout.times.len().max(layout.frequencies.len())
-        } else {
-            0
-        };
-        Self {
+    /// Checks that every array is chunked one row per chunk (direct chunk writes
+    /// depend on it) and assembles the writer.
+    fn from_parts(
+        path: PathBuf,
+        file: File,
+        layout: Layout,
+        rows: RowDatasets,
+    ) -> Result<Self, StudyFileError> {
+        let arrays = rows
+            .series
+            .iter()
+            .zip(&layout.series)
+            .chain(rows.spectra.iter().zip(&layout.spectra))
+            .chain(rows.reference_series.iter().zip(&layout.reference_series));
+        for (ds, spec) in arrays {
+            if !chunked_by_row(ds) {
+                return Err(StudyFileError::Format {
+                    path,
+                    variable: spec.name.clone(),
+                    reason: format!("chunks {:?}, not one row per chunk", ds.chunk()),
+                });
+            }
+        }
+        Ok(Self {
             path,
             file,
+            encoder: ChunkEncoder::new(layout.storage),
             layout,
             rows,
-            scratch: vec![0.0; scratch_len],
-        }
+            chunk: Vec::new(),
+        })
     }
 
     /// The file's layout.
@@ -123,12 +197,71 @@ impl StudyWriter {
     }
 
     /// Writes `record` into row `row` of every `[case, ...]` variable (`row` indexes
-    /// [`Layout::case_ids`]). Everything is checked before anything is written; the
-    /// status is written last, so a case interrupted mid-write stays pending.
+    /// [`Layout::case_ids`]), encoding its series and spectra here. Everything is
+    /// checked before anything is written; the status is written last, so a case
+    /// interrupted mid-write stays pending.
     pub fn write_case(
         &mut self,
         row: usize,
         record: &CaseRecord<'_>,
+    ) -> Result<(), StudyFileError> {
+        self.check_case(row, record)?;
+        let Self {
+            path,
+            layout,
+            rows,
+            encoder,
+            chunk,
+            ..
+        } = self;
+        for (values, (ds, spec)) in record
+            .series
+            .iter()
+            .zip(rows.series.iter().zip(&layout.series))
+            .chain(
+                record
+                    .spectra
+                    .iter()
+                    .zip(rows.spectra.iter().zip(&layout.spectra)),
+            )
+        {
+            chunk.clear();
+            encoder.encode(values, chunk);
+            write_row_chunk(ds, row, chunk).at(path, &spec.name)?;
+        }
+        self.write_scalars(row, record)
+    }
+
+    /// Writes `record`, whose series and spectra are stored chunks made by a
+    /// [`ChunkEncoder`] for this file's storage, into row `row` like
+    /// [`StudyWriter::write_case`]: the chunks go into the file unchanged.
+    pub fn write_encoded(
+        &mut self,
+        row: usize,
+        record: &EncodedRecord<'_>,
+    ) -> Result<(), StudyFileError> {
+        self.check_case(row, record)?;
+        for (chunk, (ds, spec)) in record
+            .series
+            .iter()
+            .zip(self.rows.series.iter().zip(&self.layout.series))
+            .chain(
+                record
+                    .spectra
+                    .iter()
+                    .zip(self.rows.spectra.iter().zip(&self.layout.spectra)),
+            )
+        {
+            write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
+        }
+        self.write_scalars(row, record)
+    }
+
+    /// Checks a record against the layout before anything of it is written.
+    fn check_case<R: Row + ?Sized>(
+        &self,
+        row: usize,
+        record: &Record<'_, R>,
     ) -> Result<(), StudyFileError> {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
         let n_time = self.layout.times.len();
@@ -145,15 +278,15 @@ impl StudyWriter {
                 ),
             ));
         }
-        let float32 = self.layout.storage.float32;
-        for (i, values) in record.series.iter().enumerate() {
-            let (ds, name) = (&self.rows.series[i], &self.layout.series[i].name);
-            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
-        }
-        for (i, values) in record.spectra.iter().enumerate() {
-            let (ds, name) = (&self.rows.spectra[i], &self.layout.spectra[i].name);
-            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
-        }
+        Ok(())
+    }
+
+    /// Writes a record's metrics, message and, last, status.
+    fn write_scalars<R: ?Sized>(
+        &self,
+        row: usize,
+        record: &Record<'_, R>,
+    ) -> Result<(), StudyFileError> {
         for (i, value) in record.metrics.iter().enumerate() {
             let (ds, name) = (&self.rows.metrics[i], &self.layout.metrics[i].name);
             write_one(ds, row, *value).at(&self.path, name)?;
@@ -189,13 +322,14 @@ impl StudyWriter {
             series,
             n_time,
         )?;
-        let float32 = self.layout.storage.float32;
         for (i, values) in series.iter().enumerate() {
             let (ds, name) = (
                 &self.rows.reference_series[i],
                 &self.layout.reference_series[i].name,
             );
-            write_row(ds, row, values, float32, &mut self.scratch).at(&self.path, name)?;
+            self.chunk.clear();
+            self.encoder.encode(values, &mut self.chunk);
+            write_row_chunk(ds, row, &self.chunk).at(&self.path, name)?;
         }
         Ok(())
     }
@@ -216,12 +350,12 @@ impl StudyWriter {
     }
 
     /// Checks a record's list of rows against the layout's variables: empty, or one
-    /// slice of length `len` per variable.
-    fn check_rows(
+    /// row of `len` elements per variable.
+    fn check_rows<R: Row + ?Sized>(
         &self,
         group: &str,
         specs: &[VarSpec],
-        values: &[&[f64]],
+        values: &[&R],
         len: usize,
     ) -> Result<(), StudyFileError> {
         if values.is_empty() {
@@ -234,11 +368,8 @@ impl StudyWriter {
             ));
         }
         for (spec, v) in specs.iter().zip(values) {
-            if v.len() != len {
-                return Err(self.record_error(
-                    &spec.name,
-                    format!("{} values, the dimension has {len}", v.len()),
-                ));
+            if let Some(reason) = v.misfit(len, &self.encoder) {
+                return Err(self.record_error(&spec.name, reason));
             }
         }
         Ok(())
@@ -250,26 +381,6 @@ impl StudyWriter {
             variable: variable.to_owned(),
             reason,
         }
-    }
-}
-
-/// Writes `values` into row `row` of the 2-D dataset `ds`, through the float32
-/// `scratch` buffer when storing float32.
-fn write_row(
-    ds: &Dataset,
-    row: usize,
-    values: &[f64],
-    float32: bool,
-    scratch: &mut [f32],
-) -> hdf5::Result<()> {
-    if float32 {
-        let buf = &mut scratch[..values.len()];
-        for (dst, src) in buf.iter_mut().zip(values) {
-            *dst = *src as f32;
-        }
-        ds.write_slice(&*buf, (row, ..))
-    } else {
-        ds.write_slice(values, (row, ..))
     }
 }
 

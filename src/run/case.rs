@@ -1,5 +1,6 @@
 //! One case of a study turned into what the file stores: series, spectra, metrics.
 
+use super::stats::thread_cpu;
 use crate::mechanism::CaseParams;
 use crate::metrics::{vibration_metrics, Deviation};
 use crate::output::spectrum::SpectrumPlan;
@@ -77,6 +78,17 @@ pub struct CaseResult {
     pub spectra: Vec<Vec<f64>>,
     /// One value per [`metric_specs`] entry (NaN where unknown).
     pub metrics: Vec<f64>,
+    /// What computing the case cost (not stored in the file or the journal).
+    pub cost: CaseCost,
+}
+
+/// Thread CPU time one case took (s), by activity.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CaseCost {
+    /// Integration and sampling.
+    pub simulate: f64,
+    /// Spectra (FFT) and metrics.
+    pub analysis: f64,
 }
 
 /// Index of the first sample at or after `transient` (s).
@@ -97,8 +109,15 @@ pub fn run_case(
     plan: &mut SpectrumPlan,
 ) -> CaseResult {
     let start = std::time::Instant::now();
+    let cpu_start = thread_cpu();
     let n_metrics = metric_specs().len();
-    let out = match simulate(params, &study.solver, &study.sampling) {
+    let simulated = simulate(params, &study.solver, &study.sampling);
+    let cpu_simulated = thread_cpu();
+    let mut cost = CaseCost {
+        simulate: cpu_simulated - cpu_start,
+        analysis: 0.0,
+    };
+    let out = match simulated {
         Ok(out) => out,
         Err(e) => {
             let mut metrics = vec![f64::NAN; n_metrics];
@@ -110,6 +129,7 @@ pub fn run_case(
                 series: Vec::new(),
                 spectra: Vec::new(),
                 metrics,
+                cost,
             };
         }
     };
@@ -126,6 +146,7 @@ pub fn run_case(
                 series: Vec::new(),
                 spectra: Vec::new(),
                 metrics: vec![f64::NAN; n_metrics],
+                cost,
             };
         }
         spectra.push(amp);
@@ -154,6 +175,7 @@ pub fn run_case(
         start.elapsed().as_secs_f64(),
     ]);
     debug_assert_eq!(metrics.len(), n_metrics);
+    cost.analysis = thread_cpu() - cpu_simulated;
     CaseResult {
         row,
         status: Status::Ok,
@@ -161,6 +183,7 @@ pub fn run_case(
         series: out.channels,
         spectra,
         metrics,
+        cost,
     }
 }
 

@@ -5,22 +5,33 @@
 //! complete (an atomic rename), so `OUT.h5` is either absent or whole. The journal
 //! `OUT.h5.journal` is deleted after the rename.
 //!
-//! Format: a header (magic, fingerprint of the study, array sizes), then records
-//! `[b"CASE", row u64, status i8, message length u32, message bytes, f64 values,
-//! FNV-1a checksum u64]`, little-endian. Reading stops at the first truncated or
-//! corrupt record (a kill during a write), which is cut off before appending again.
+//! A case's journal record is also the form in which it reaches the writer thread: a
+//! worker encodes the series and spectra into the chunks the study file stores
+//! ([`ChunkEncoder`]) straight into the record, and checksums it
+//! ([`JournalRecord::encode`]). The writer thread appends the bytes to the journal and
+//! hands the chunks to HDF5's direct chunk write; resuming replays the same records.
+//!
+//! Format: a header (magic, fingerprint of the study, array sizes, storage), then
+//! records `[b"CASE", row u64, status i8, message length u32, message bytes, number of
+//! series u32, number of spectra u32, chunk lengths u64 each, chunk bytes, number of
+//! metrics u32, metrics f64 each, CRC-32 of the record u32]`, little-endian. Reading
+//! stops at the first truncated or corrupt record (a kill during a write), which is
+//! cut off before appending again.
 
 use std::fs::{File, OpenOptions};
 use std::io::{self, BufReader, Read, Seek, SeekFrom, Write};
+use std::ops::Range;
 use std::path::Path;
 
 use super::case::CaseResult;
-use crate::output::Status;
+use crate::output::{ChunkEncoder, EncodedRecord, Status, Storage, StudyFileError, StudyWriter};
 
-const MAGIC: &[u8; 8] = b"SRJOURN1";
+const MAGIC: &[u8; 8] = b"SRJOURN2";
 const RECORD: &[u8; 4] = b"CASE";
+/// Bytes of a record before its message: tag, row, status, message length.
+const FIXED: usize = 4 + 8 + 1 + 4;
 
-/// What a journal must match to be resumed: the study and the array sizes.
+/// What a journal must match to be resumed: the study, the array sizes and storage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct JournalHeader {
     /// Fingerprint of the study (grid text, version, shard).
@@ -35,6 +46,8 @@ pub struct JournalHeader {
     pub n_spectra: u64,
     /// Number of metrics per case.
     pub n_metrics: u64,
+    /// How the chunks in the records are encoded.
+    pub storage: Storage,
 }
 
 impl JournalHeader {
@@ -47,14 +60,23 @@ impl JournalHeader {
             self.n_freq,
             self.n_spectra,
             self.n_metrics,
+            u64::from(self.storage.float32),
+            u64::from(self.storage.deflate_level),
         ] {
             b.extend(v.to_le_bytes());
         }
         b
     }
+
+    /// Most bytes one stored chunk of `len` elements can take (the encoder's stored
+    /// blocks add 5 bytes per 64 KiB, the zlib frame 11): a bound for reading.
+    fn max_chunk(&self, len: u64) -> u64 {
+        let raw = len * if self.storage.float32 { 4 } else { 8 };
+        raw + raw / 1024 + 64
+    }
 }
 
-/// FNV-1a, 64 bit: a checksum for records and the study fingerprint.
+/// FNV-1a, 64 bit: the study fingerprint.
 pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for part in parts {
@@ -66,10 +88,124 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     h
 }
 
-/// Appends records; every record is written whole and flushed to the OS.
+/// CRC-32 (zlib's) of a record: what tells a whole record from a torn one.
+fn checksum(bytes: &[u8]) -> u32 {
+    zlib_rs::crc32::crc32(0, bytes)
+}
+
+/// One finished case as a journal record: its bytes (with the series and spectra
+/// inside as stored chunks) and where its parts lie in them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JournalRecord {
+    bytes: Vec<u8>,
+    row: usize,
+    status: Status,
+    message: Range<usize>,
+    n_series: usize,
+    chunks: Vec<Range<usize>>,
+    metrics: Vec<f64>,
+}
+
+impl JournalRecord {
+    /// Encodes `result`: its series and spectra into chunks by `encoder` (which must
+    /// encode for the study file's storage), then the whole record with its checksum.
+    /// Meant for the worker thread that computed the case.
+    pub fn encode(result: &CaseResult, encoder: &mut ChunkEncoder) -> Self {
+        let rows = result.series.len() + result.spectra.len();
+        let raw: usize = result
+            .series
+            .iter()
+            .chain(&result.spectra)
+            .map(|r| 8 * r.len())
+            .sum();
+        let mut b = Vec::with_capacity(FIXED + result.message.len() + 8 * rows + raw + 64);
+        b.extend(RECORD);
+        b.extend((result.row as u64).to_le_bytes());
+        b.push(result.status.code() as u8);
+        b.extend((result.message.len() as u32).to_le_bytes());
+        b.extend(result.message.as_bytes());
+        let message = FIXED..FIXED + result.message.len();
+        b.extend((result.series.len() as u32).to_le_bytes());
+        b.extend((result.spectra.len() as u32).to_le_bytes());
+        let lengths_at = b.len();
+        b.resize(lengths_at + 8 * rows, 0);
+        let mut chunks = Vec::with_capacity(rows);
+        for values in result.series.iter().chain(&result.spectra) {
+            let start = b.len();
+            encoder.encode(values, &mut b);
+            chunks.push(start..b.len());
+        }
+        for (k, c) in chunks.iter().enumerate() {
+            let at = lengths_at + 8 * k;
+            b[at..at + 8].copy_from_slice(&(c.len() as u64).to_le_bytes());
+        }
+        b.extend((result.metrics.len() as u32).to_le_bytes());
+        for v in &result.metrics {
+            b.extend(v.to_le_bytes());
+        }
+        let sum = checksum(&b);
+        b.extend(sum.to_le_bytes());
+        Self {
+            bytes: b,
+            row: result.row,
+            status: result.status,
+            message,
+            n_series: result.series.len(),
+            chunks,
+            metrics: result.metrics.clone(),
+        }
+    }
+
+    /// The case's row in the study file.
+    pub fn row(&self) -> usize {
+        self.row
+    }
+
+    /// Ok or failed.
+    pub fn status(&self) -> Status {
+        self.status
+    }
+
+    /// Why the case failed (empty when ok).
+    pub fn message(&self) -> &str {
+        std::str::from_utf8(&self.bytes[self.message.clone()]).expect("checked UTF-8")
+    }
+
+    /// One value per metric (NaN where unknown).
+    pub fn metrics(&self) -> &[f64] {
+        &self.metrics
+    }
+
+    /// The record's bytes, as the journal stores them.
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    /// Size of the chunks (series and spectra as stored) in bytes.
+    pub fn chunk_bytes(&self) -> usize {
+        self.chunks.iter().map(Range::len).sum()
+    }
+
+    /// Writes the case into the study file: its chunks go in unchanged.
+    pub fn write_to(&self, writer: &mut StudyWriter) -> Result<(), StudyFileError> {
+        let chunks: Vec<&[u8]> = self.chunks.iter().map(|c| &self.bytes[c.clone()]).collect();
+        let (series, spectra) = chunks.split_at(self.n_series);
+        writer.write_encoded(
+            self.row,
+            &EncodedRecord {
+                series,
+                spectra,
+                metrics: &self.metrics,
+                status: self.status,
+                message: self.message(),
+            },
+        )
+    }
+}
+
+/// Appends records; every record is written whole and handed to the OS.
 pub struct JournalWriter {
     file: File,
-    buf: Vec<u8>,
 }
 
 impl JournalWriter {
@@ -77,10 +213,7 @@ impl JournalWriter {
     pub fn create(path: &Path, header: &JournalHeader) -> io::Result<Self> {
         let mut file = File::create(path)?;
         file.write_all(&header.bytes())?;
-        Ok(Self {
-            file,
-            buf: Vec::new(),
-        })
+        Ok(Self { file })
     }
 
     /// Reopens the journal at `path` for appending after its first `valid_len` bytes.
@@ -88,33 +221,12 @@ impl JournalWriter {
         let mut file = OpenOptions::new().write(true).open(path)?;
         file.set_len(valid_len)?;
         file.seek(SeekFrom::End(0))?;
-        Ok(Self {
-            file,
-            buf: Vec::new(),
-        })
+        Ok(Self { file })
     }
 
     /// Appends one case.
-    pub fn write(&mut self, r: &CaseResult) -> io::Result<()> {
-        let b = &mut self.buf;
-        b.clear();
-        b.extend(RECORD);
-        b.extend((r.row as u64).to_le_bytes());
-        b.push(r.status.code() as u8);
-        b.extend((r.message.len() as u32).to_le_bytes());
-        b.extend(r.message.as_bytes());
-        for v in r
-            .series
-            .iter()
-            .chain(&r.spectra)
-            .flatten()
-            .chain(&r.metrics)
-        {
-            b.extend(v.to_le_bytes());
-        }
-        let sum = fnv1a(&[b]);
-        b.extend(sum.to_le_bytes());
-        self.file.write_all(b)
+    pub fn write(&mut self, record: &JournalRecord) -> io::Result<()> {
+        self.file.write_all(&record.bytes)
     }
 }
 
@@ -124,7 +236,6 @@ pub struct JournalReader {
     header: JournalHeader,
     /// Bytes of the header and the valid records read so far.
     valid_len: u64,
-    buf: Vec<u8>,
 }
 
 /// Why a journal cannot be resumed.
@@ -138,7 +249,7 @@ pub enum JournalError {
         /// The I/O error.
         source: io::Error,
     },
-    /// The journal was written for another study, version or shard.
+    /// The journal was written for another study, version, shard or journal format.
     #[error("the journal {path} belongs to a different study, studyrun version or shard; run with --force to start over")]
     Mismatch {
         /// The journal.
@@ -165,7 +276,6 @@ impl JournalReader {
             input,
             header: *expected,
             valid_len: want.len() as u64,
-            buf: Vec::new(),
         })
     }
 
@@ -175,69 +285,68 @@ impl JournalReader {
     }
 
     /// The next valid record, or `None` at the end or at a truncated/corrupt record.
-    pub fn next_record(&mut self) -> Option<CaseResult> {
+    pub fn next_record(&mut self) -> Option<JournalRecord> {
         let h = self.header;
-        let b = &mut self.buf;
-        b.clear();
-        let mut take = |n: usize, b: &mut Vec<u8>| -> Option<()> {
+        let mut b = Vec::new();
+        let mut take = |n: u64, b: &mut Vec<u8>| -> Option<Range<usize>> {
             let start = b.len();
-            b.resize(start + n, 0);
-            self.input.read_exact(&mut b[start..]).ok()
+            b.resize(start + usize::try_from(n).ok()?, 0);
+            self.input.read_exact(&mut b[start..]).ok()?;
+            Some(start..b.len())
         };
-        take(4 + 8 + 1 + 4, b)?;
+        let u32_at =
+            |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"));
+        take(FIXED as u64, &mut b)?;
         if &b[..4] != RECORD {
             return None;
         }
         let row = u64::from_le_bytes(b[4..12].try_into().ok()?) as usize;
         let status = Status::from_code(b[12] as i8)?;
-        let msg_len = u32::from_le_bytes(b[13..17].try_into().ok()?) as usize;
-        take(msg_len, b)?;
-        let message = String::from_utf8(b[17..17 + msg_len].to_vec()).ok()?;
-        let ok = status == Status::Ok;
-        let n_series = if ok {
-            (h.n_series * h.n_time) as usize
-        } else {
-            0
-        };
-        let n_spectra = if ok {
-            (h.n_spectra * h.n_freq) as usize
-        } else {
-            0
-        };
-        let n_values = n_series + n_spectra + h.n_metrics as usize;
-        let values_at = b.len();
-        take(8 * n_values + 8, b)?;
-        let sum_at = b.len() - 8;
-        if fnv1a(&[&b[..sum_at]]) != u64::from_le_bytes(b[sum_at..].try_into().ok()?) {
+        let message = take(u64::from(u32_at(&b, 13)), &mut b)?;
+        std::str::from_utf8(&b[message.clone()]).ok()?;
+        let counts = take(8, &mut b)?;
+        let n_series = u32_at(&b, counts.start) as usize;
+        let n_spectra = u32_at(&b, counts.start + 4) as usize;
+        let whole = (n_series as u64, n_spectra as u64) == (h.n_series, h.n_spectra);
+        if !whole && (n_series, n_spectra) != (0, 0) {
             return None;
         }
-        let values: Vec<f64> = b[values_at..sum_at]
+        let lengths = take(8 * (n_series + n_spectra) as u64, &mut b)?;
+        let mut chunks = Vec::with_capacity(n_series + n_spectra);
+        for (k, len) in b[lengths].chunks_exact(8).enumerate() {
+            let len = u64::from_le_bytes(len.try_into().ok()?);
+            let dim = if k < n_series { h.n_time } else { h.n_freq };
+            if len > h.max_chunk(dim) {
+                return None;
+            }
+            chunks.push(len);
+        }
+        let chunks = chunks
+            .into_iter()
+            .map(|len| take(len, &mut b))
+            .collect::<Option<Vec<_>>>()?;
+        let n_metrics = take(4, &mut b)?;
+        if u64::from(u32_at(&b, n_metrics.start)) != h.n_metrics {
+            return None;
+        }
+        let metrics = take(8 * h.n_metrics, &mut b)?;
+        let sum = take(4, &mut b)?;
+        if checksum(&b[..sum.start]) != u32_at(&b, sum.start) {
+            return None;
+        }
+        let metrics = b[metrics]
             .chunks_exact(8)
             .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
             .collect();
-        let split = |v: &[f64], n: u64| -> Vec<Vec<f64>> {
-            if n == 0 {
-                Vec::new()
-            } else {
-                v.chunks(n as usize).map(<[f64]>::to_vec).collect()
-            }
-        };
         self.valid_len += b.len() as u64;
-        Some(CaseResult {
+        Some(JournalRecord {
+            bytes: b,
             row,
             status,
             message,
-            series: if ok {
-                split(&values[..n_series], h.n_time)
-            } else {
-                Vec::new()
-            },
-            spectra: if ok {
-                split(&values[n_series..n_series + n_spectra], h.n_freq)
-            } else {
-                Vec::new()
-            },
-            metrics: values[n_series + n_spectra..].to_vec(),
+            n_series,
+            chunks,
+            metrics,
         })
     }
 }
@@ -246,7 +355,7 @@ impl JournalReader {
 mod tests {
     use super::*;
 
-    fn record(row: usize, ok: bool) -> CaseResult {
+    fn result(row: usize, ok: bool) -> CaseResult {
         CaseResult {
             row,
             status: if ok { Status::Ok } else { Status::Failed },
@@ -262,6 +371,7 @@ mod tests {
             },
             spectra: if ok { vec![vec![0.25; 2]] } else { Vec::new() },
             metrics: vec![row as f64, f64::NAN],
+            cost: Default::default(),
         }
     }
 
@@ -276,33 +386,86 @@ mod tests {
             n_freq: 2,
             n_spectra: 1,
             n_metrics: 2,
+            storage: Storage::default(),
         };
+        let mut encoder = ChunkEncoder::new(header.storage);
         let mut w = JournalWriter::create(&path, &header).unwrap();
-        for (row, ok) in [(4, true), (1, false), (2, true)] {
-            w.write(&record(row, ok)).unwrap();
+        let written: Vec<JournalRecord> = [(4, true), (1, false), (2, true)]
+            .into_iter()
+            .map(|(row, ok)| JournalRecord::encode(&result(row, ok), &mut encoder))
+            .collect();
+        for rec in &written {
+            w.write(rec).unwrap();
         }
         drop(w);
         // A kill in the middle of a fourth record leaves a torn tail.
         let full = std::fs::metadata(&path).unwrap().len();
         let mut f = OpenOptions::new().append(true).open(&path).unwrap();
-        f.write_all(b"CASE\x09\x00\x00").unwrap();
+        f.write_all(&written[0].bytes()[..40]).unwrap();
         drop(f);
         let mut r = JournalReader::open(&path, &header).unwrap();
-        let mut rows = Vec::new();
+        let mut read = Vec::new();
         while let Some(rec) = r.next_record() {
-            let want = record(rec.row, rec.status == Status::Ok);
-            assert_eq!(format!("{rec:?}"), format!("{want:?}")); // NaN-aware equality
-            rows.push(rec.row);
+            read.push(rec);
         }
-        assert_eq!(rows, [4, 1, 2]);
+        assert_eq!(read.len(), 3);
+        for (got, want) in read.iter().zip(&written) {
+            assert_eq!(got.bytes(), want.bytes());
+            assert_eq!(format!("{got:?}"), format!("{want:?}")); // NaN-aware equality
+        }
+        assert_eq!(read[1].message(), "step size underflow");
+        assert_eq!(read[1].chunk_bytes(), 0);
         assert_eq!(r.valid_len(), full);
-        let other = JournalHeader {
-            fingerprint: 8,
-            ..header
+        for other in [
+            JournalHeader {
+                fingerprint: 8,
+                ..header
+            },
+            JournalHeader {
+                storage: Storage {
+                    float32: true,
+                    ..header.storage
+                },
+                ..header
+            },
+        ] {
+            assert!(matches!(
+                JournalReader::open(&path, &other),
+                Err(JournalError::Mismatch { .. })
+            ));
+        }
+    }
+
+    #[test]
+    fn a_corrupt_byte_ends_the_valid_records() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("j");
+        let header = JournalHeader {
+            fingerprint: 1,
+            n_time: 3,
+            n_series: 2,
+            n_freq: 2,
+            n_spectra: 1,
+            n_metrics: 2,
+            storage: Storage::default(),
         };
-        assert!(matches!(
-            JournalReader::open(&path, &other),
-            Err(JournalError::Mismatch { .. })
-        ));
+        let mut encoder = ChunkEncoder::new(header.storage);
+        let mut w = JournalWriter::create(&path, &header).unwrap();
+        let first = JournalRecord::encode(&result(0, true), &mut encoder);
+        w.write(&first).unwrap();
+        w.write(&JournalRecord::encode(&result(1, true), &mut encoder))
+            .unwrap();
+        drop(w);
+        let mut bytes = std::fs::read(&path).unwrap();
+        let at = header.bytes().len() + first.bytes().len() + 30;
+        bytes[at] ^= 0x40;
+        std::fs::write(&path, bytes).unwrap();
+        let mut r = JournalReader::open(&path, &header).unwrap();
+        assert_eq!(r.next_record().map(|rec| rec.row()), Some(0));
+        assert!(r.next_record().is_none());
+        assert_eq!(
+            r.valid_len(),
+            (header.bytes().len() + first.bytes().len()) as u64
+        );
     }
 }

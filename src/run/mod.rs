@@ -1,11 +1,14 @@
 //! Running a study: cases in parallel (rayon), one writer (the HDF5 library is not
 //! thread-safe), bounded memory, a crash journal, resume, shards and merging.
 //!
-//! Data flow: workers simulate cases and send [`CaseResult`]s through a bounded
-//! channel; the calling thread appends each to the journal, writes it into
-//! `OUT.h5.partial` and reports progress. At the end the partial file is renamed
-//! to `OUT.h5` (atomic) and the journal removed. Case data do not depend on the
-//! number of threads: each case is simulated on its own, in one thread.
+//! Data flow: workers simulate cases, compute spectra and metrics, encode the series
+//! and spectra into the chunks the file stores (float32 conversion, shuffle, deflate)
+//! inside the case's journal record ([`JournalRecord::encode`]), and send the records
+//! through a bounded channel; the calling thread appends each to the journal, copies
+//! its chunks into `OUT.h5.partial` (HDF5 direct chunk write) and reports progress.
+//! At the end the partial file is renamed to `OUT.h5` (atomic) and the journal
+//! removed. Case data do not depend on the number of threads: each case is simulated
+//! and encoded on its own, in one thread. [`RunStats`] says where the time went.
 
 mod case;
 mod inspect;
@@ -13,23 +16,27 @@ mod journal;
 mod layout;
 mod merge;
 mod progress;
+mod stats;
 
-pub use case::{metric_specs, run_case, window_start, CaseResult, REFERENCE_CHANNELS};
+pub use case::{metric_specs, run_case, window_start, CaseCost, CaseResult, REFERENCE_CHANNELS};
 pub use inspect::inspect;
-pub use journal::{fnv1a, JournalError, JournalHeader, JournalReader, JournalWriter};
+pub use journal::{
+    fnv1a, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
+};
 pub use layout::{study_layout, StudyFingerprint, MODEL_CONVENTIONS};
 pub use merge::merge;
+pub use stats::RunStats;
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::sync_channel;
+use std::sync::mpsc::{sync_channel, SendError, SyncSender, TrySendError};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 
 use crate::output::spectrum::{SpectrumPlan, Window};
-use crate::output::{Status, StudyWriter};
+use crate::output::{ChunkEncoder, Status, StudyWriter};
 use crate::simulate::{simulate, CaseOutput};
 use crate::study::Study;
 
@@ -94,6 +101,8 @@ pub struct RunSummary {
     pub resumed: usize,
     /// Wall-clock time (s).
     pub wall_time: f64,
+    /// Where the CPU time went and whether the workers waited for the writer.
+    pub stats: RunStats,
 }
 
 /// The journal and partial-file paths that belong to `output`.
@@ -176,7 +185,11 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         n_freq: layout.frequencies.len() as u64,
         n_spectra: layout.spectra.len() as u64,
         n_metrics: layout.metrics.len() as u64,
+        storage: layout.storage,
     };
+    let raw_per_case = 8 * (header.n_series * header.n_time + header.n_spectra * header.n_freq);
+    let mut stats = RunStats::default();
+    let cpu = thread_cpu();
     let mut writer = StudyWriter::create(&partial_path, &layout)
         .with_context(|| format!("cannot create {}", partial_path.display()))?;
     for (k, r) in references.iter().enumerate() {
@@ -186,6 +199,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             .collect();
         writer.write_reference(k, &series)?;
     }
+    stats.create = thread_cpu() - cpu;
 
     // Replay what an interrupted run finished.
     let mut done = HashSet::new();
@@ -193,9 +207,9 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let mut journal = if opts.resume {
         let mut reader = JournalReader::open(&journal_path, &header)?;
         while let Some(rec) = reader.next_record() {
-            if rec.row < rows.len() && done.insert(rec.row) {
-                write_record(&mut writer, &rec)?;
-                if rec.status == Status::Ok {
+            if rec.row() < rows.len() && done.insert(rec.row()) {
+                rec.write_to(&mut writer)?;
+                if rec.status() == Status::Ok {
                     ok += 1
                 } else {
                     failed += 1
@@ -217,44 +231,58 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let k0 = window_start(study);
     let n_window = layout.times.len() - k0;
     let window = window_of(study);
-    // At most two results per worker wait for the writer: memory stays bounded.
-    let (tx, rx) = sync_channel::<CaseResult>(2 * opts.jobs.max(1));
+    let storage = layout.storage;
+    // At most two records per worker wait for the writer: memory stays bounded.
+    let (tx, rx) = sync_channel::<JournalRecord>(2 * opts.jobs.max(1));
+    let tally = WorkerTally::default();
     let n_pending = pending.len();
-    let (rows_ref, refs) = (&rows, &references);
+    let (rows_ref, refs, tally_ref) = (&rows, &references, &tally);
     let received = std::thread::scope(|scope| -> Result<usize> {
         // The workers own the sender: when they end, normally or not, the channel closes.
         scope.spawn(move || {
             pool.install(|| {
                 pending.par_iter().try_for_each_init(
                     || {
-                        SpectrumPlan::new(n_window, window)
-                            .expect("window length checked by the layout")
+                        let plan = SpectrumPlan::new(n_window, window)
+                            .expect("window length checked by the layout");
+                        (plan, ChunkEncoder::new(storage))
                     },
-                    |plan, &row| {
+                    |(plan, encoder), &row| {
                         let case = &study.cases[rows_ref[row]];
-                        tx.send(run_case(
-                            study,
-                            row,
-                            &case.params,
-                            &refs[case.reference],
-                            plan,
-                        ))
+                        let result =
+                            run_case(study, row, &case.params, &refs[case.reference], plan);
+                        let cpu = thread_cpu();
+                        let record = JournalRecord::encode(&result, encoder);
+                        tally_ref.case(
+                            result.cost.simulate,
+                            result.cost.analysis,
+                            thread_cpu() - cpu,
+                        );
+                        send(&tx, record, tally_ref)
                     },
                 )
             })
         });
         let mut received = 0;
-        for rec in rx.iter() {
+        // `rx` is consumed: if this loop stops early (an error), the channel closes and
+        // the workers stop instead of waiting for a writer that is gone.
+        for rec in rx {
+            let cpu = thread_cpu();
             journal
                 .write(&rec)
                 .with_context(|| format!("cannot append to {}", journal_path.display()))?;
-            write_record(&mut writer, &rec)?;
-            if rec.status == Status::Ok {
-                ok += 1
+            let cpu_journal = thread_cpu();
+            rec.write_to(&mut writer)?;
+            stats.journal += cpu_journal - cpu;
+            stats.hdf5 += thread_cpu() - cpu_journal;
+            stats.stored_bytes += rec.chunk_bytes() as u64;
+            if rec.status() == Status::Ok {
+                ok += 1;
+                stats.raw_bytes += raw_per_case;
             } else {
                 failed += 1
             }
-            progress.case_done(rec.status != Status::Ok);
+            progress.case_done(rec.status() != Status::Ok);
             received += 1;
         }
         Ok(received)
@@ -263,9 +291,13 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         bail!("a worker thread stopped after {received} of {n_pending} cases; rerun with --resume");
     }
     progress.finish();
+    let cpu = thread_cpu();
     writer
         .finish()
         .with_context(|| format!("cannot finish {}", partial_path.display()))?;
+    stats.finish = thread_cpu() - cpu;
+    stats.sends = received as u64;
+    tally.add_to(&mut stats);
     std::fs::rename(&partial_path, &opts.output).with_context(|| {
         format!(
             "cannot rename {} to {}",
@@ -282,24 +314,24 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         failed,
         resumed,
         wall_time: start.elapsed().as_secs_f64(),
+        stats,
     })
 }
 
-use progress::Progress;
-
-/// Writes one case result into the file.
-pub fn write_record(writer: &mut StudyWriter, rec: &CaseResult) -> Result<()> {
-    let series: Vec<&[f64]> = rec.series.iter().map(Vec::as_slice).collect();
-    let spectra: Vec<&[f64]> = rec.spectra.iter().map(Vec::as_slice).collect();
-    writer.write_case(
-        rec.row,
-        &crate::output::CaseRecord {
-            series: &series,
-            spectra: &spectra,
-            metrics: &rec.metrics,
-            status: rec.status,
-            message: &rec.message,
-        },
-    )?;
-    Ok(())
+/// Sends `record` to the writer; a send that finds the channel full (the writer is
+/// behind, so the worker waits) is counted in `tally` with its waiting time.
+fn send<T>(tx: &SyncSender<T>, record: T, tally: &WorkerTally) -> Result<(), SendError<T>> {
+    match tx.try_send(record) {
+        Ok(()) => Ok(()),
+        Err(TrySendError::Disconnected(record)) => Err(SendError(record)),
+        Err(TrySendError::Full(record)) => {
+            let waiting = Instant::now();
+            let sent = tx.send(record);
+            tally.blocked(waiting.elapsed());
+            sent
+        }
+    }
 }
+
+use progress::Progress;
+use stats::{thread_cpu, WorkerTally};

@@ -1,0 +1,148 @@
+//! Where a run's time goes: thread CPU time per activity, summed over the workers and
+//! the writer thread, and how often a worker had to wait for the writer.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+/// CPU time consumed by the calling thread so far (s), from
+/// `CLOCK_THREAD_CPUTIME_ID`; time spent blocked or descheduled does not count.
+pub fn thread_cpu() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the call; the clock id is a
+    // constant every Linux and macOS kernel supports.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    if rc != 0 {
+        return 0.0;
+    }
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+/// What a run spent its CPU time on (s, thread CPU time summed over threads) and how
+/// the channel from the workers to the writer behaved.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunStats {
+    /// Integrating and sampling the cases (workers), s.
+    pub simulate: f64,
+    /// Spectra (FFT) and metrics of the cases (workers), s.
+    pub analysis: f64,
+    /// Encoding chunks and journal records: float32 conversion, shuffle, deflate,
+    /// checksum (workers), s.
+    pub encode: f64,
+    /// Appending records to the journal (writer thread), s.
+    pub journal: f64,
+    /// Creating the HDF5 file (layout, coordinates, parameters) and writing the
+    /// reference runs (writer thread), s.
+    pub create: f64,
+    /// Writing the cases into the HDF5 file (writer thread), s.
+    pub hdf5: f64,
+    /// Flushing and closing the HDF5 file at the end (writer thread), s.
+    pub finish: f64,
+    /// Cases sent from the workers to the writer.
+    pub sends: u64,
+    /// Sends that found the channel full, so that a worker waited for the writer.
+    pub blocked_sends: u64,
+    /// Wall-clock time workers spent waiting on a full channel, s.
+    pub send_wait: f64,
+    /// Bytes of series and spectra as computed (8 per value).
+    pub raw_bytes: u64,
+    /// Bytes of the chunks written for them (after float32 conversion and deflate).
+    pub stored_bytes: u64,
+}
+
+impl RunStats {
+    /// CPU time of the output side: spectra, metrics, encoding, journal, HDF5 (s).
+    pub fn output(&self) -> f64 {
+        self.analysis + self.encode + self.journal + self.create + self.hdf5 + self.finish
+    }
+
+    /// CPU time of everything measured (s).
+    pub fn total(&self) -> f64 {
+        self.simulate + self.output()
+    }
+
+    /// Share of the measured CPU time spent on the output side (0–1).
+    pub fn output_share(&self) -> f64 {
+        self.output() / self.total().max(f64::MIN_POSITIVE)
+    }
+}
+
+impl std::fmt::Display for RunStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let per_case = |s: f64| 1e3 * s / (self.sends.max(1) as f64);
+        writeln!(f, "thread CPU time           total s   ms/case")?;
+        for (name, s) in [
+            ("simulate (workers)", self.simulate),
+            ("spectra+metrics (workers)", self.analysis),
+            ("encode (workers)", self.encode),
+            ("journal (writer)", self.journal),
+            ("create file (writer)", self.create),
+            ("hdf5 (writer)", self.hdf5),
+            ("finish (writer)", self.finish),
+        ] {
+            writeln!(f, "  {name:<26}{s:>9.3} {:>9.3}", per_case(s))?;
+        }
+        writeln!(
+            f,
+            "output share of CPU time: {:.1} %",
+            100.0 * self.output_share()
+        )?;
+        writeln!(
+            f,
+            "stored {:.1} MB of {:.1} MB raw (ratio {:.2})",
+            self.stored_bytes as f64 / 1e6,
+            self.raw_bytes as f64 / 1e6,
+            self.raw_bytes as f64 / (self.stored_bytes.max(1) as f64)
+        )?;
+        write!(
+            f,
+            "channel: {} sends, {} found it full ({:.3} s waiting)",
+            self.sends, self.blocked_sends, self.send_wait
+        )
+    }
+}
+
+/// Worker-side tallies, shared by every worker thread.
+#[derive(Debug, Default)]
+pub(super) struct WorkerTally {
+    simulate_ns: AtomicU64,
+    analysis_ns: AtomicU64,
+    encode_ns: AtomicU64,
+    blocked_sends: AtomicU64,
+    send_wait_ns: AtomicU64,
+}
+
+/// Seconds as whole nanoseconds, for the atomic tallies.
+fn nanos(seconds: f64) -> u64 {
+    (seconds * 1e9).round().max(0.0) as u64
+}
+
+impl WorkerTally {
+    /// One case computed: simulation, analysis and encoding CPU time (s).
+    pub(super) fn case(&self, simulate: f64, analysis: f64, encode: f64) {
+        self.simulate_ns
+            .fetch_add(nanos(simulate), Ordering::Relaxed);
+        self.analysis_ns
+            .fetch_add(nanos(analysis), Ordering::Relaxed);
+        self.encode_ns.fetch_add(nanos(encode), Ordering::Relaxed);
+    }
+
+    /// One send found the channel full and waited `waited`.
+    pub(super) fn blocked(&self, waited: Duration) {
+        self.blocked_sends.fetch_add(1, Ordering::Relaxed);
+        self.send_wait_ns
+            .fetch_add(waited.as_nanos() as u64, Ordering::Relaxed);
+    }
+
+    /// Adds the tallies into `stats`.
+    pub(super) fn add_to(&self, stats: &mut RunStats) {
+        let s = |a: &AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
+        stats.simulate += s(&self.simulate_ns);
+        stats.analysis += s(&self.analysis_ns);
+        stats.encode += s(&self.encode_ns);
+        stats.blocked_sends += self.blocked_sends.load(Ordering::Relaxed);
+        stats.send_wait += s(&self.send_wait_ns);
+    }
+}
