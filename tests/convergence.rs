@@ -120,9 +120,9 @@ fn rk4_has_order_four_and_pair_errors_fall_with_tolerance_on_a_smooth_problem() 
 /// range over 0.2 s, see MODEL.md §8), two revolutions, against DOPRI5 at 1e-12.
 /// Measure: the largest pointwise difference relative to the channel's range, which
 /// impact spikes dominate (a small shift in an impact's timing shows up in full).
-/// - DOPRI5 at 1e-9 agrees to 1e-3 (measured 5.8e-5 to 1.3e-4 over the three
-///   channels); so do Tsit5 at 1e-9 (1.8e-4 to 2.2e-4, with 10 % fewer RHS
-///   evaluations than DOPRI5) and DOP853 at 1e-9 (5.1e-4 to 6.3e-4, with 11 % more:
+/// - DOPRI5 at 1e-9 agrees to 1e-3 (measured 4.3e-5 to 5.3e-5 over the three
+///   channels); so do Tsit5 at 1e-9 (1.8e-4 to 2.2e-4, with 9 % fewer RHS
+///   evaluations than DOPRI5) and DOP853 at 1e-9 (5.1e-4 to 6.3e-4, with 12 % more:
 ///   its high order does not pay across the contact onsets).
 /// - SDIRK4 at 1e-9 agrees to 1e-2 (measured 6e-3; 3.5e-3 at 1e-11: its error
 ///   estimate resolves the impact onsets less sharply than DOPRI5's).
