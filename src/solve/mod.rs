@@ -48,6 +48,8 @@ pub enum Method {
     },
     /// Adaptive Tsitouras 5(4) (Tsit5) with its order-4 continuous extension: the
     /// cost per step of [`Method::DormandPrince`] with smaller error coefficients.
+    /// On the non-chaotic paper cases it needs 5–10 % fewer evaluations than
+    /// DOPRI5 at the same tolerance, with a similar or smaller metric error.
     /// `rtol` is relative, `atol` absolute in the units of each state component.
     Tsit5 {
         /// Relative tolerance (dimensionless).
@@ -56,7 +58,11 @@ pub enum Method {
         atol: f64,
     },
     /// Adaptive Dormand–Prince 8(5,3) as in Hairer's DOP853, with its order-7
-    /// continuous extension: for tight tolerances.
+    /// continuous extension: for tight tolerances on smooth problems. Across the
+    /// contact onsets of the bearing cases (a jump of the damping force) its error
+    /// falls only like `h`, and its many rejected steps of 12 evaluations cost more
+    /// than its order saves: on the paper cases it needs more evaluations than
+    /// DOPRI5 for a given error.
     /// `rtol` is relative, `atol` absolute in the units of each state component.
     Dop853 {
         /// Relative tolerance (dimensionless).
