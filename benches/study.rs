@@ -62,26 +62,32 @@ impl Params {
             let [name, value] = pair else {
                 panic!("`{}` needs a value", pair[0]);
             };
-            let bad = || panic!("bad value `{value}` for {name}");
             match name.as_str() {
-                "--cases" => p.cases = value.parse().unwrap_or_else(|_| bad()),
-                "--duration" => p.duration = value.parse().unwrap_or_else(|_| bad()),
+                "--cases" => p.cases = parse(name, value),
+                "--duration" => p.duration = parse(name, value),
                 "--rss-cases" => {
-                    let v: Vec<usize> = value
-                        .split(',')
-                        .map(|s| s.trim().parse().unwrap_or_else(|_| bad()))
-                        .collect();
-                    p.rss_cases = v.try_into().unwrap_or_else(|_| bad());
+                    let v: Vec<usize> = value.split(',').map(|s| parse(name, s)).collect();
+                    p.rss_cases = v
+                        .try_into()
+                        .unwrap_or_else(|_| panic!("{name} takes two counts, e.g. 200,2000"));
                 }
-                "--rss-duration" => p.rss_duration = value.parse().unwrap_or_else(|_| bad()),
-                "--sample-rate" => p.sample_rate = value.parse().unwrap_or_else(|_| bad()),
-                "--compression" => p.compression = value.parse().unwrap_or_else(|_| bad()),
+                "--rss-duration" => p.rss_duration = parse(name, value),
+                "--sample-rate" => p.sample_rate = parse(name, value),
+                "--compression" => p.compression = parse(name, value),
                 "--dtype" => p.dtype = value.clone(),
                 other => panic!("unknown parameter {other}; see benches/study.rs"),
             }
         }
         p
     }
+}
+
+/// The value of parameter `name`, or a panic naming it.
+fn parse<T: std::str::FromStr>(name: &str, value: &str) -> T {
+    value
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("bad value `{value}` for {name}"))
 }
 
 /// Writes a grid of at least `cases` cases (a multiple of 8) of `duration` seconds

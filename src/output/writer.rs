@@ -1,8 +1,8 @@
 //! Creating a study file and writing cases into it, in any order.
 
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
+use hdf5::plist::file_access::MetadataCacheConfig;
 use hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, H5Type};
@@ -95,7 +95,15 @@ impl Row for [u8] {
 ///
 /// Series, spectra and reference series are written with HDF5's direct chunk write:
 /// a row is one chunk, encoded (float32 conversion, shuffle, deflate) by a
-/// [`ChunkEncoder`], here or by the caller, and copied into the file as it is.
+/// [`ChunkEncoder`], here or by the caller, and copied into the file as it is. The
+/// per-case scalars (metrics, status, error message) are kept in memory, a few bytes
+/// per case and variable, and written one variable at a time by
+/// [`StudyWriter::flush`] and [`StudyWriter::finish`] (or, best effort, when the
+/// writer is dropped): a file whose writer never flushed shows every case pending.
+///
+/// HDF5's metadata cache is bounded to 512 KiB, so that memory does not grow with
+/// the number of chunks (the chunk index's B-tree nodes are several
+/// times larger in memory than the cache counts them).
 pub struct StudyWriter {
     path: PathBuf,
     file: File,
@@ -105,6 +113,91 @@ pub struct StudyWriter {
     encoder: ChunkEncoder,
     /// The chunk being written from values, reused.
     chunk: Vec<u8>,
+    scalars: Scalars,
+}
+
+/// Upper bound of HDF5's metadata cache for a written file (bytes, as HDF5 counts
+/// entries: their size on disk).
+const METADATA_CACHE_BYTES: usize = 512 * 1024;
+
+/// The `[case]` scalars of every row, written whole by [`Scalars::write`].
+struct Scalars {
+    path: PathBuf,
+    /// Per metric: its dataset and one value per case.
+    metrics: Vec<(Dataset, Vec<f64>)>,
+    status: (Dataset, Vec<i8>),
+    messages: (Dataset, Vec<String>),
+    /// Something changed since the last write.
+    dirty: bool,
+}
+
+impl Scalars {
+    /// The scalars as the file holds them now (NaN, pending and empty in a new file).
+    fn read(rows: &RowDatasets, layout: &Layout, path: &Path) -> Result<Self, StudyFileError> {
+        let metrics = rows
+            .metrics
+            .iter()
+            .zip(&layout.metrics)
+            .map(|(ds, spec)| Ok((ds.clone(), ds.read_raw::<f64>().at(path, &spec.name)?)))
+            .collect::<Result<_, StudyFileError>>()?;
+        let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
+        let messages = rows
+            .error_message
+            .read_raw::<VarLenUnicode>()
+            .at(path, ERROR_MESSAGE)?
+            .iter()
+            .map(|m| m.as_str().to_owned())
+            .collect();
+        Ok(Self {
+            path: path.to_owned(),
+            metrics,
+            status: (rows.status.clone(), status),
+            messages: (rows.error_message.clone(), messages),
+            dirty: false,
+        })
+    }
+
+    /// Records row `row`'s metrics (if any), status and message.
+    fn set(&mut self, row: usize, metrics: &[f64], status: Status, message: &str) {
+        for ((_, column), value) in self.metrics.iter_mut().zip(metrics) {
+            column[row] = *value;
+        }
+        self.status.1[row] = status.code();
+        self.messages.1[row] = message.replace('\0', "\u{FFFD}");
+        self.dirty = true;
+    }
+
+    /// Writes every scalar variable whole if anything changed; the status last.
+    fn write(&mut self) -> Result<(), StudyFileError> {
+        if !self.dirty {
+            return Ok(());
+        }
+        let path = &self.path;
+        for (ds, values) in &self.metrics {
+            ds.write_raw(values).at(path, &ds.name())?;
+        }
+        let messages = self
+            .messages
+            .1
+            .iter()
+            .map(|m| attributes::vlen(m))
+            .collect::<hdf5::Result<Vec<_>>>()
+            .at(path, ERROR_MESSAGE)?;
+        self.messages
+            .0
+            .write_raw(&messages)
+            .at(path, ERROR_MESSAGE)?;
+        self.status.0.write_raw(&self.status.1).at(path, STATUS)?;
+        self.dirty = false;
+        Ok(())
+    }
+}
+
+impl Drop for Scalars {
+    /// Writes what [`StudyWriter::finish`] did not (errors cannot be reported here).
+    fn drop(&mut self) {
+        let _ = self.write();
+    }
 }
 
 impl std::fmt::Debug for StudyWriter {
@@ -126,6 +219,7 @@ impl StudyWriter {
             reason,
         })?;
         let file = File::with_options()
+            .with_fapl(|p| p.mdc_config(&bounded_metadata_cache()))
             .with_fcpl(|p| {
                 p.link_creation_order(LinkCreationOrder::Indexed)
                     .attr_creation_order(AttrCreationOrder::Indexed)
@@ -147,7 +241,10 @@ impl StudyWriter {
     /// Its layout is read back from the file; see [`StudyWriter::layout`].
     pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
         let path = path.as_ref().to_owned();
-        let file = File::open_rw(&path).at(&path, "/")?;
+        let file = File::with_options()
+            .with_fapl(|p| p.mdc_config(&bounded_metadata_cache()))
+            .open_rw(&path)
+            .at(&path, "/")?;
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
         Self::from_parts(path, file, layout, rows)
@@ -176,6 +273,7 @@ impl StudyWriter {
                 });
             }
         }
+        let scalars = Scalars::read(&rows, &layout, &path)?;
         Ok(Self {
             path,
             file,
@@ -183,6 +281,7 @@ impl StudyWriter {
             layout,
             rows,
             chunk: Vec::new(),
+            scalars,
         })
     }
 
@@ -198,8 +297,8 @@ impl StudyWriter {
 
     /// Writes `record` into row `row` of every `[case, ...]` variable (`row` indexes
     /// [`Layout::case_ids`]), encoding its series and spectra here. Everything is
-    /// checked before anything is written; the status is written last, so a case
-    /// interrupted mid-write stays pending.
+    /// checked before anything is written; the scalars reach the file at the next
+    /// flush, so a case interrupted mid-write stays pending.
     pub fn write_case(
         &mut self,
         row: usize,
@@ -229,7 +328,9 @@ impl StudyWriter {
             encoder.encode(values, chunk);
             write_row_chunk(ds, row, chunk).at(path, &spec.name)?;
         }
-        self.write_scalars(row, record)
+        self.scalars
+            .set(row, record.metrics, record.status, record.message);
+        Ok(())
     }
 
     /// Writes `record`, whose series and spectra are stored chunks made by a
@@ -254,7 +355,9 @@ impl StudyWriter {
         {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
-        self.write_scalars(row, record)
+        self.scalars
+            .set(row, record.metrics, record.status, record.message);
+        Ok(())
     }
 
     /// Checks a record against the layout before anything of it is written.
@@ -279,26 +382,6 @@ impl StudyWriter {
             ));
         }
         Ok(())
-    }
-
-    /// Writes a record's metrics, message and, last, status.
-    fn write_scalars<R: ?Sized>(
-        &self,
-        row: usize,
-        record: &Record<'_, R>,
-    ) -> Result<(), StudyFileError> {
-        for (i, value) in record.metrics.iter().enumerate() {
-            let (ds, name) = (&self.rows.metrics[i], &self.layout.metrics[i].name);
-            write_one(ds, row, *value).at(&self.path, name)?;
-        }
-        let message = if record.message.contains('\0') {
-            Cow::Owned(record.message.replace('\0', "\u{FFFD}"))
-        } else {
-            Cow::Borrowed(record.message)
-        };
-        let message = attributes::vlen(&message).at(&self.path, ERROR_MESSAGE)?;
-        write_one(&self.rows.error_message, row, message).at(&self.path, ERROR_MESSAGE)?;
-        write_one(&self.rows.status, row, record.status.code()).at(&self.path, STATUS)
     }
 
     /// Writes row `row` of every `[reference, time]` variable: one slice per
@@ -334,17 +417,23 @@ impl StudyWriter {
         Ok(())
     }
 
-    /// Flushes everything written so far to disk.
-    pub fn flush(&self) -> Result<(), StudyFileError> {
+    /// Writes the per-case scalars and flushes everything written so far to disk.
+    pub fn flush(&mut self) -> Result<(), StudyFileError> {
+        self.scalars.write()?;
         self.file.flush().at(&self.path, "/")
     }
 
     /// Flushes and closes the file, reporting errors that dropping would hide.
-    pub fn finish(self) -> Result<(), StudyFileError> {
+    pub fn finish(mut self) -> Result<(), StudyFileError> {
         self.flush()?;
         let Self {
-            path, file, rows, ..
+            path,
+            file,
+            rows,
+            scalars,
+            ..
         } = self;
+        drop(scalars);
         drop(rows);
         file.close().at(&path, "/")
     }
@@ -384,9 +473,16 @@ impl StudyWriter {
     }
 }
 
-/// Writes one element of the 1-D dataset `ds`.
-fn write_one<T: H5Type>(ds: &Dataset, row: usize, value: T) -> hdf5::Result<()> {
-    ds.write_slice(std::slice::from_ref(&value), row..row + 1)
+/// HDF5's metadata cache configuration bounded to [`METADATA_CACHE_BYTES`] (its
+/// adaptive resizing stays between half and all of it).
+fn bounded_metadata_cache() -> MetadataCacheConfig {
+    MetadataCacheConfig {
+        set_initial_size: true,
+        initial_size: METADATA_CACHE_BYTES / 2,
+        min_size: METADATA_CACHE_BYTES / 2,
+        max_size: METADATA_CACHE_BYTES,
+        ..MetadataCacheConfig::default()
+    }
 }
 
 /// Lays out a new file.
