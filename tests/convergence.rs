@@ -79,7 +79,11 @@ fn rk4_has_order_four_and_pair_errors_fall_with_tolerance_on_a_smooth_problem() 
     let xs: Vec<f64> = (0..errors.len()).map(|k| k as f64).collect();
     let ys: Vec<f64> = errors.iter().map(|e| -e.log2()).collect();
     let (mx, my) = (xs.iter().sum::<f64>() / 4.0, ys.iter().sum::<f64>() / 4.0);
-    let order = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+    let order = xs
+        .iter()
+        .zip(&ys)
+        .map(|(x, y)| (x - mx) * (y - my))
+        .sum::<f64>()
         / xs.iter().map(|x| (x - mx) * (x - mx)).sum::<f64>();
     println!("RK4 errors {errors:?}, fitted order {order}");
     assert!((order - 4.0).abs() < 0.2, "RK4 observed order {order}");
