@@ -134,6 +134,8 @@ fn run_in_process(grid: &Path, output: &Path, jobs: usize) -> RunSummary {
 /// and peak resident set size (bytes), from `wait4` on the child.
 fn run_child(grid: &Path, output: &Path) -> (f64, u64) {
     let start = Instant::now();
+    // Reaped by `wait4` below, which also gives its resource usage.
+    #[allow(clippy::zombie_processes)]
     let child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
         .arg(grid)
         .args(["-o", output.to_str().expect("UTF-8 path"), "-j", "2", "-q"])
