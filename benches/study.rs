@@ -18,7 +18,7 @@
 //! | `--cases N` | 64 | cases of the scaling and CPU-time study (rounded up to a multiple of 8) |
 //! | `--duration S` | 0.05 | simulated time per case of that study (s) |
 //! | `--rss-cases A,B` | 200,2000 | case counts of the two memory runs |
-//! | `--rss-duration S` | 0.02 | simulated time per case of the memory runs (s) |
+//! | `--rss-duration S` | 0.01 | simulated time per case of the memory runs (s) |
 //! | `--sample-rate HZ` | 50000 | samples per second of every series |
 //! | `--compression L` | 1 | deflate level of the series and spectra (0: none) |
 //! | `--dtype T` | float64 | `float64` or `float32` storage |
@@ -49,7 +49,7 @@ impl Params {
             cases: 64,
             duration: 0.05,
             rss_cases: [200, 2000],
-            rss_duration: 0.02,
+            rss_duration: 0.01,
             sample_rate: 50_000.0,
             compression: 1,
             dtype: "float64".to_owned(),
