@@ -18,7 +18,7 @@
 //! | `--cases N` | 64 | cases of the scaling and CPU-time study (rounded up to a multiple of 8) |
 //! | `--duration S` | 0.05 | simulated time per case of that study (s) |
 //! | `--rss-cases A,B` | 200,2000 | case counts of the two memory runs |
-//! | `--rss-duration S` | 0.02 | simulated time per case of the memory runs (s) |
+//! | `--rss-duration S` | 0.01 | simulated time per case of the memory runs (s) |
 //! | `--sample-rate HZ` | 50000 | samples per second of every series |
 //! | `--compression L` | 1 | deflate level of the series and spectra (0: none) |
 //! | `--dtype T` | float64 | `float64` or `float32` storage |
@@ -49,7 +49,7 @@ impl Params {
             cases: 64,
             duration: 0.05,
             rss_cases: [200, 2000],
-            rss_duration: 0.02,
+            rss_duration: 0.01,
             sample_rate: 50_000.0,
             compression: 1,
             dtype: "float64".to_owned(),
@@ -136,6 +136,8 @@ fn run_in_process(grid: &Path, output: &Path, jobs: usize) -> RunSummary {
 #[allow(clippy::zombie_processes)]
 fn run_child(grid: &Path, output: &Path) -> (f64, u64) {
     let start = Instant::now();
+    // Reaped by `wait4` below, which also gives its resource usage.
+    #[allow(clippy::zombie_processes)]
     let child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
         .arg(grid)
         .args(["-o", output.to_str().expect("UTF-8 path"), "-j", "2", "-q"])

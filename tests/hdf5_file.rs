@@ -671,23 +671,13 @@ fn direct_chunks_read_like_hdf5_filtered_chunks() {
             vec![]
         };
         assert_eq!(ds.filters(), expected_filters, "{name}");
-        let all: Vec<u64> = ds
-            .read_raw::<f64>()
-            .unwrap()
-            .iter()
-            .map(|v| v.to_bits())
-            .collect();
+        let all = bits(&ds.read_raw::<f64>().unwrap());
         assert_eq!(all, want.concat(), "{name}: HDF5's read_raw");
         if !float32 {
             let reference = dir.join(format!("{name}_hdf5_filters.h5"));
             write_through_hdf5_filters(&reference, storage, &rows);
             let theirs = hdf5::File::open(&reference).unwrap().dataset("x").unwrap();
-            let theirs: Vec<u64> = theirs
-                .read_raw::<f64>()
-                .unwrap()
-                .iter()
-                .map(|v| v.to_bits())
-                .collect();
+            let theirs = bits(&theirs.read_raw::<f64>().unwrap());
             assert_eq!(all, theirs, "{name}: same values as HDF5's own filters");
             std::fs::remove_file(&reference).unwrap();
         }

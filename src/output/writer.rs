@@ -313,17 +313,7 @@ impl StudyWriter {
             chunk,
             ..
         } = self;
-        for (values, (ds, spec)) in record
-            .series
-            .iter()
-            .zip(rows.series.iter().zip(&layout.series))
-            .chain(
-                record
-                    .spectra
-                    .iter()
-                    .zip(rows.spectra.iter().zip(&layout.spectra)),
-            )
-        {
+        for (values, ds, spec) in case_arrays(rows, layout, record) {
             chunk.clear();
             encoder.encode(values, chunk);
             write_row_chunk(ds, row, chunk).at(path, &spec.name)?;
@@ -342,17 +332,7 @@ impl StudyWriter {
         record: &EncodedRecord<'_>,
     ) -> Result<(), StudyFileError> {
         self.check_case(row, record)?;
-        for (chunk, (ds, spec)) in record
-            .series
-            .iter()
-            .zip(self.rows.series.iter().zip(&self.layout.series))
-            .chain(
-                record
-                    .spectra
-                    .iter()
-                    .zip(self.rows.spectra.iter().zip(&self.layout.spectra)),
-            )
-        {
+        for (chunk, ds, spec) in case_arrays(&self.rows, &self.layout, record) {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
         self.scalars
@@ -471,6 +451,23 @@ impl StudyWriter {
             reason,
         }
     }
+}
+
+/// A record's series then spectra rows, each with its dataset and variable.
+fn case_arrays<'a, R: ?Sized>(
+    rows: &'a RowDatasets,
+    layout: &'a Layout,
+    record: &'a Record<'_, R>,
+) -> impl Iterator<Item = (&'a R, &'a Dataset, &'a VarSpec)> {
+    let series = record.series.iter().zip(&rows.series).zip(&layout.series);
+    let spectra = record
+        .spectra
+        .iter()
+        .zip(&rows.spectra)
+        .zip(&layout.spectra);
+    series
+        .chain(spectra)
+        .map(|((values, ds), spec)| (&**values, ds, spec))
 }
 
 /// HDF5's metadata cache configuration bounded to [`METADATA_CACHE_BYTES`] (its

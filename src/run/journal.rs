@@ -375,19 +375,24 @@ mod tests {
         }
     }
 
-    #[test]
-    fn round_trips_and_stops_at_a_torn_record() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("j");
-        let header = JournalHeader {
-            fingerprint: 7,
+    /// The header of a journal of [`result`]s.
+    fn header(fingerprint: u64) -> JournalHeader {
+        JournalHeader {
+            fingerprint,
             n_time: 3,
             n_series: 2,
             n_freq: 2,
             n_spectra: 1,
             n_metrics: 2,
             storage: Storage::default(),
-        };
+        }
+    }
+
+    #[test]
+    fn round_trips_and_stops_at_a_torn_record() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("j");
+        let header = header(7);
         let mut encoder = ChunkEncoder::new(header.storage);
         let mut w = JournalWriter::create(&path, &header).unwrap();
         let written: Vec<JournalRecord> = [(4, true), (1, false), (2, true)]
@@ -440,15 +445,7 @@ mod tests {
     fn a_corrupt_byte_ends_the_valid_records() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("j");
-        let header = JournalHeader {
-            fingerprint: 1,
-            n_time: 3,
-            n_series: 2,
-            n_freq: 2,
-            n_spectra: 1,
-            n_metrics: 2,
-            storage: Storage::default(),
-        };
+        let header = header(1);
         let mut encoder = ChunkEncoder::new(header.storage);
         let mut w = JournalWriter::create(&path, &header).unwrap();
         let first = JournalRecord::encode(&result(0, true), &mut encoder);
