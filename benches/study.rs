@@ -132,8 +132,6 @@ fn run_in_process(grid: &Path, output: &Path, jobs: usize) -> RunSummary {
 
 /// Runs the `studyrun` binary on `grid` with two workers; returns its wall time (s)
 /// and peak resident set size (bytes), from `wait4` on the child.
-// The child is reaped by `wait4` below, which clippy cannot see.
-#[allow(clippy::zombie_processes)]
 fn run_child(grid: &Path, output: &Path) -> (f64, u64) {
     let start = Instant::now();
     // Reaped by `wait4` below, which also gives its resource usage.
