@@ -237,11 +237,6 @@ impl BallSet {
         self.balls == 0
     }
 
-    /// True when at least one race has waviness of nonzero amplitude.
-    pub fn is_wavy(&self) -> bool {
-        !self.waves.is_empty()
-    }
-
     /// `F = Σ F_r n_r` and the loaded-ball count at state `s`. No allocation.
     pub fn force(&mut self, s: &ContactState) -> BallSum {
         let offset: &[f64x4] = if self.waves.is_empty() {
