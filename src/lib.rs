@@ -10,8 +10,8 @@
 //!    bearing eccentricity), with the [`bearing`]'s SIMD ball kernel at the chosen
 //!    location. The same mechanism on the general planar [`multibody`] core is the
 //!    reference it is tested against, and carries the energy ledger.
-//! 2. [`solve`] integrates it with an adaptive Dormand–Prince pair, fixed-step RK4
-//!    or an implicit SDIRK method.
+//! 2. [`solve`] integrates it with an adaptive explicit pair (locating the contact
+//!    switches and restarting there), fixed-step RK4 or an implicit SDIRK method.
 //! 3. [`simulate`] samples the outputs of MODEL.md §3 at exact sample times and
 //!    [`metrics`] turns them into vibration measures against the ideal mechanism.
 //!
@@ -30,3 +30,4 @@ pub mod run;
 pub mod simulate;
 pub mod solve;
 pub mod study;
+pub mod trig;

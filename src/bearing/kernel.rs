@@ -4,9 +4,10 @@
 //! - Struct of arrays: per-ball base directions, offsets and waviness coefficients
 //!   live in separate `f64` arrays padded to a multiple of [`LANES`]. Pad balls have
 //!   no direction and an offset of −∞, so they are never loaded and add exactly 0.
-//! - One `sin_cos` per evaluation for the cage angle (each ball's normal is its base
-//!   direction rotated by it) and one per waviness harmonic (each ball's height is a
-//!   precomputed rotation of that harmonic's phase).
+//! - The sines and cosines of the cage angle (each ball's normal is its base
+//!   direction rotated by it) and of each waviness harmonic's phase (each ball's
+//!   height is a precomputed rotation of it) come from one [`LANES`]-wide `sin_cos`
+//!   per four angles: one call per evaluation for up to three harmonics.
 //! - Branch-free over the balls: contact is a mask (`δ > 0`), never an `if`. The
 //!   loop runs over [`LANES`]-wide vectors of the `wide` crate (portable SIMD on
 //!   stable Rust: packed SSE2 on baseline x86-64, AVX when a build enables it; the
@@ -16,11 +17,20 @@
 //!   [`TwoSided`]): the law is chosen once per evaluation outside the ball loop, and
 //!   a case without damping or waviness runs code that has none.
 //!
+//! - A [`Regime`] (which balls are loaded) can be held fixed: [`BallSet::force_in`]
+//!   applies the contact law of the regime's balls whatever the sign of `δ`
+//!   (continued as `K δ |δ|^{1/2}`), so the force is smooth in the state while the
+//!   regime holds. Every evaluation reports its [`BallSum::margin`], the smallest
+//!   signed distance (m) of a ball from switching; a negative margin says the regime
+//!   no longer matches the state. The event-locating integrators use both.
+//!
 //! [`BallSet::ball`] is the kernel's scalar twin: one ball at a time, with every
 //! waviness height from its own `sin`, as a reference for parity tests and for the
 //! energy terms.
 
 use wide::f64x4;
+
+use crate::trig::sin_cos4;
 
 use super::{BearingParams, DampingModel, RaceWaviness};
 
@@ -47,8 +57,20 @@ pub struct ContactState {
 pub struct BallSum {
     /// `F = Σ F_r n_r`, the force on the housing (N, global); the journal gets `−F`.
     pub force: [f64; 2],
-    /// Number of balls with `δ_r > 0`.
+    /// Number of loaded balls: those with `δ_r > 0`, or the regime's.
     pub loaded: usize,
+    /// Switching margin (m) under a held [`Regime`]: the smallest `δ_r` of a loaded
+    /// ball and `−δ_r` of an unloaded one; it turns negative once a ball's `δ_r` has
+    /// changed sign. `+∞` under the natural law, which never has to switch.
+    pub margin: f64,
+}
+
+/// Which balls are loaded, held fixed over an integrator step
+/// ([`BallSet::freeze`], [`BallSet::force_in`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Regime {
+    /// All bits set in the lanes of loaded balls, [`LANES`] balls per vector.
+    loaded: Vec<f64x4>,
 }
 
 /// One ball, evaluated on its own by [`BallSet::ball`].
@@ -76,6 +98,51 @@ pub trait DampingLaw: Copy {
     /// Ball forces (N) from `elastic = K δ₊^{3/2}` (N), approach speeds `v_r` (m/s)
     /// and `loaded` (all bits set where `δ > 0`, else 0).
     fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4;
+}
+
+/// Whether the lanes' balls are loaded: by the sign of `δ` (the natural law), or as
+/// a held [`Regime`] says.
+trait LoadRule: Copy {
+    /// The load mask of lane vector `i` with deflections `delta`, and the deflection
+    /// the elastic force `K d |d|^{1/2}` takes: `δ` on loaded lanes, 0 elsewhere
+    /// (so that unloaded lanes take the square root of 0).
+    fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4);
+    /// `margin` lowered by the lanes' signed distances from switching: `δ` where
+    /// loaded, `−δ` where not. The natural law cannot switch and leaves it alone.
+    fn margin(self, margin: f64x4, mask: f64x4, delta: f64x4) -> f64x4;
+}
+
+/// Loaded where `δ > 0`.
+#[derive(Clone, Copy)]
+struct Natural;
+
+/// Loaded as a held regime says.
+#[derive(Clone, Copy)]
+struct Held<'a>(&'a [f64x4]);
+
+impl LoadRule for Natural {
+    #[inline(always)]
+    fn load(self, _i: usize, delta: f64x4) -> (f64x4, f64x4) {
+        (delta.simd_gt(f64x4::ZERO), delta.fast_max(f64x4::ZERO))
+    }
+
+    #[inline(always)]
+    fn margin(self, margin: f64x4, _mask: f64x4, _delta: f64x4) -> f64x4 {
+        margin
+    }
+}
+
+impl LoadRule for Held<'_> {
+    #[inline(always)]
+    fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4) {
+        (self.0[i], delta & self.0[i])
+    }
+
+    #[inline(always)]
+    fn margin(self, margin: f64x4, mask: f64x4, delta: f64x4) -> f64x4 {
+        // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone.
+        margin.fast_min(mask.bitselect(delta, -delta))
+    }
 }
 
 /// No damping (`C = 0`): `F_r = K δ₊^{3/2}`.
@@ -166,6 +233,11 @@ pub struct BallSet {
     waves: Vec<Wave>,
     /// Scratch: `base + Σ waviness` per ball for the current evaluation (m).
     offset: Vec<f64x4>,
+    /// Scratch: the cage angle, each wave's phase `N ψ + φ`, then a caller's angle
+    /// (rad), padded to a multiple of [`LANES`]; their sines and cosines.
+    angles: Vec<f64>,
+    sines: Vec<f64>,
+    cosines: Vec<f64>,
 }
 
 impl BallSet {
@@ -222,8 +294,11 @@ impl BallSet {
             dir_sin: per_ball(&f64::sin, 0.0),
             base_offset,
             base: per_ball(&|_| base_offset, f64::NEG_INFINITY),
-            waves,
             offset: vec![f64x4::ZERO; vectors],
+            angles: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
+            sines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
+            cosines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
+            waves,
         }
     }
 
@@ -237,19 +312,121 @@ impl BallSet {
         self.balls == 0
     }
 
-    /// `F = Σ F_r n_r` and the loaded-ball count at state `s`. No allocation.
+    /// `F = Σ F_r n_r`, the loaded-ball count and the switching margin at state `s`
+    /// under the natural law (a ball is loaded when `δ_r > 0`). No allocation.
     pub fn force(&mut self, s: &ContactState) -> BallSum {
-        let offset: &[f64x4] = if self.waves.is_empty() {
+        self.evaluate(s, None, 0.0).0
+    }
+
+    /// As [`BallSet::force`], with the balls of `regime` loaded whatever the sign of
+    /// their `δ_r` and the others unloaded: a loaded ball's elastic force is
+    /// continued as `K δ |δ|^{1/2}`, so the force stays smooth while the state moves
+    /// on past a switch, and [`BallSum::margin`] turns negative.
+    pub fn force_in(&mut self, s: &ContactState, regime: &Regime) -> BallSum {
+        self.evaluate(s, Some(regime), 0.0).0
+    }
+
+    /// [`BallSet::force_in`] with `regime`, or [`BallSet::force`] without, and the
+    /// `(sin, cos)` of a caller's `angle` (rad) from the same SIMD `sin_cos` as the
+    /// kernel's own angles (with up to two waviness harmonics, it adds nothing).
+    pub fn evaluate(
+        &mut self,
+        s: &ContactState,
+        regime: Option<&Regime>,
+        angle: f64,
+    ) -> (BallSum, (f64, f64)) {
+        let extra = 1 + self.waves.len();
+        self.angles[extra] = angle;
+        self.prepare(s);
+        let trig = (self.sines[extra], self.cosines[extra]);
+        let sum = match regime {
+            Some(r) => self.sum(s, Held(&r.loaded)),
+            None => self.sum(s, Natural),
+        };
+        (sum, trig)
+    }
+
+    /// An empty regime (no ball loaded) sized for this set.
+    pub fn no_regime(&self) -> Regime {
+        Regime {
+            loaded: vec![f64x4::ZERO; self.dir_cos.len()],
+        }
+    }
+
+    /// Sets `regime` to the balls loaded at state `s` under the natural law.
+    pub fn freeze(&mut self, s: &ContactState, regime: &mut Regime) {
+        self.prepare(s);
+        let offset = self.current_offsets();
+        let (sc, cc) = (self.sines[0], self.cosines[0]);
+        let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
+        let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
+        for (((m, dc), ds), off) in regime
+            .loaded
+            .iter_mut()
+            .zip(&self.dir_cos)
+            .zip(&self.dir_sin)
+            .zip(offset)
+        {
+            let delta = ex * (cc * *dc - sc * *ds) + ey * (sc * *dc + cc * *ds) + *off;
+            *m = Natural.load(0, delta).0;
+        }
+    }
+
+    /// The kernel under load rule `rule`, once [`BallSet::prepare`] has run for `s`.
+    #[inline(always)]
+    fn sum<R: LoadRule>(&self, s: &ContactState, rule: R) -> BallSum {
+        let trig = (self.sines[0], self.cosines[0]);
+        let k = self.stiffness;
+        let balls = Balls {
+            dir_cos: &self.dir_cos,
+            dir_sin: &self.dir_sin,
+            offset: self.current_offsets(),
+        };
+        match self.law {
+            Law::Undamped => sum_balls(balls, s, trig, k, Undamped, rule),
+            Law::CompressionOnly(c) => sum_balls(balls, s, trig, k, CompressionOnly(c), rule),
+            Law::TwoSided(c) => sum_balls(balls, s, trig, k, TwoSided(c), rule),
+        }
+    }
+
+    /// The per-ball offsets of the evaluation [`BallSet::prepare`] set up (m).
+    fn current_offsets(&self) -> &[f64x4] {
+        if self.waves.is_empty() {
             &self.base
         } else {
-            fill_offsets(&mut self.offset, &self.base, &self.waves, s);
             &self.offset
-        };
-        let (dc, ds, k) = (&self.dir_cos, &self.dir_sin, self.stiffness);
-        match self.law {
-            Law::Undamped => sum_balls(dc, ds, offset, s, k, Undamped),
-            Law::CompressionOnly(c) => sum_balls(dc, ds, offset, s, k, CompressionOnly(c)),
-            Law::TwoSided(c) => sum_balls(dc, ds, offset, s, k, TwoSided(c)),
+        }
+    }
+
+    /// Computes the sines and cosines of the cage angle, the wave phases at `s` and
+    /// the caller's angle ([`LANES`] per `sin_cos`) and fills the per-ball offsets
+    /// when the set is wavy.
+    fn prepare(&mut self, s: &ContactState) {
+        self.angles[0] = s.cage;
+        for (a, w) in self.angles[1..].iter_mut().zip(&self.waves) {
+            let psi = match w.race {
+                Race::Inner => s.psi_in,
+                Race::Outer => s.psi_out,
+            };
+            *a = w.number * psi + w.phase;
+        }
+        for ((a, sn), cs) in self
+            .angles
+            .chunks_exact(LANES)
+            .zip(self.sines.chunks_exact_mut(LANES))
+            .zip(self.cosines.chunks_exact_mut(LANES))
+        {
+            let (vs, vc) = sin_cos4([a[0], a[1], a[2], a[3]]);
+            sn.copy_from_slice(&vs);
+            cs.copy_from_slice(&vc);
+        }
+        if !self.waves.is_empty() {
+            fill_offsets(
+                &mut self.offset,
+                &self.base,
+                &self.waves,
+                (&self.sines[1..], &self.cosines[1..]),
+            );
         }
     }
 
@@ -299,16 +476,16 @@ impl BallSet {
     }
 }
 
-/// `offset[r] = base[r] + Σ_h Π_p,h sin(N_h (α_r + ψ) + φ_h)`, with one `sin_cos`
-/// per harmonic: `sin(N α_r + x) = sin x cos N α_r + cos x sin N α_r`.
-fn fill_offsets(offset: &mut [f64x4], base: &[f64x4], waves: &[Wave], s: &ContactState) {
+/// `offset[r] = base[r] + Σ_h Π_p,h sin(N_h α_r + x_h)` with `x_h = N_h ψ + φ_h`
+/// given by its sine and cosine: `sin(N α_r + x) = sin x cos N α_r + cos x sin N α_r`.
+fn fill_offsets(
+    offset: &mut [f64x4],
+    base: &[f64x4],
+    waves: &[Wave],
+    (sines, cosines): (&[f64], &[f64]),
+) {
     offset.copy_from_slice(base);
-    for w in waves {
-        let psi = match w.race {
-            Race::Inner => s.psi_in,
-            Race::Outer => s.psi_out,
-        };
-        let (sn, cs) = (w.number * psi + w.phase).sin_cos();
+    for ((w, &sn), &cs) in waves.iter().zip(sines).zip(cosines) {
         let (sn, cs) = (f64x4::splat(sn), f64x4::splat(cs));
         for ((o, c), s) in offset.iter_mut().zip(&w.cos_term).zip(&w.sin_term) {
             *o += sn * *c + cs * *s;
@@ -316,29 +493,47 @@ fn fill_offsets(offset: &mut [f64x4], base: &[f64x4], waves: &[Wave], s: &Contac
     }
 }
 
-/// The branch-free ball loop, [`LANES`] balls per iteration.
+/// The per-ball data of one evaluation: base directions and offsets (m).
+#[derive(Clone, Copy)]
+struct Balls<'a> {
+    dir_cos: &'a [f64x4],
+    dir_sin: &'a [f64x4],
+    offset: &'a [f64x4],
+}
+
+/// The branch-free ball loop, [`LANES`] balls per iteration, with the cage angle's
+/// `(sin, cos)` in `cage`. A loaded ball's elastic force is `K δ |δ|^{1/2}` (equal to
+/// `K δ^{3/2}` under the natural law, its smooth continuation under a held regime).
+/// Unloaded lanes take the square root of 0, which `sqrtpd` finishes early.
 #[inline(always)]
-fn sum_balls<D: DampingLaw>(
-    dir_cos: &[f64x4],
-    dir_sin: &[f64x4],
-    offset: &[f64x4],
+fn sum_balls<D: DampingLaw, R: LoadRule>(
+    balls: Balls<'_>,
     s: &ContactState,
+    (sc, cc): (f64, f64),
     stiffness: f64,
     law: D,
+    rule: R,
 ) -> BallSum {
-    let (sc, cc) = s.cage.sin_cos();
     let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
     let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
     let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
     let k = f64x4::splat(stiffness);
     let (mut fx, mut fy, mut loaded) = (f64x4::ZERO, f64x4::ZERO, f64x4::ZERO);
-    for ((dc, ds), off) in dir_cos.iter().zip(dir_sin).zip(offset) {
+    let mut margin = f64x4::splat(f64::INFINITY);
+    for (i, ((dc, ds), off)) in balls
+        .dir_cos
+        .iter()
+        .zip(balls.dir_sin)
+        .zip(balls.offset)
+        .enumerate()
+    {
         let nx = cc * *dc - sc * *ds;
         let ny = sc * *dc + cc * *ds;
         let delta = ex * nx + ey * ny + *off;
-        let mask = delta.simd_gt(f64x4::ZERO);
-        let d = delta.fast_max(f64x4::ZERO);
-        let f = law.force(k * d * d.sqrt(), vx * nx + vy * ny, mask);
+        let (mask, d) = rule.load(i, delta);
+        margin = rule.margin(margin, mask, delta);
+        let elastic = k * d * d.abs().sqrt();
+        let f = law.force(elastic, vx * nx + vy * ny, mask);
         fx += f * nx;
         fy += f * ny;
         loaded += f64x4::ONE & mask;
@@ -346,5 +541,6 @@ fn sum_balls<D: DampingLaw>(
     BallSum {
         force: [fx.reduce_add(), fy.reduce_add()],
         loaded: loaded.reduce_add() as usize,
+        margin: margin.to_array().into_iter().fold(f64::INFINITY, f64::min),
     }
 }

@@ -11,7 +11,7 @@ pub mod kernel;
 pub mod stiffness;
 mod waviness;
 
-pub use kernel::{BallSet, BallSum, ContactState};
+pub use kernel::{BallSet, BallSum, ContactState, Regime};
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
 use crate::error::ParamError;

@@ -22,7 +22,7 @@
 //! parity tests compare the two. The ideal mechanism has no state at all and is
 //! sampled in closed form.
 
-use crate::bearing::{BallSet, BallSum, CageWeights};
+use crate::bearing::{BallSet, BallSum, CageWeights, Regime};
 use crate::error::{ModelError, ParamError};
 use crate::solve::OdeSystem;
 
@@ -45,10 +45,15 @@ struct Constants {
 }
 
 impl Constants {
-    /// Kinematics at time `t` (s), eccentricity `e` (m) and its rate `ed` (m/s).
-    fn kinematics(&self, t: f64, e: [f64; 2], ed: [f64; 2]) -> Result<Kinematics, ModelError> {
+    /// Kinematics at crank angle `ω t` given as `(sin, cos)`, eccentricity `e` (m)
+    /// and its rate `ed` (m/s).
+    fn kinematics(
+        &self,
+        (uy, ux): (f64, f64),
+        e: [f64; 2],
+        ed: [f64; 2],
+    ) -> Result<Kinematics, ModelError> {
         let k = self;
-        let (uy, ux) = (k.omega * t).sin_cos();
         let w2 = k.omega * k.omega;
         let s = -(e[1] + k.l2 * uy) / k.l3;
         let c2 = 1.0 - s * s;
@@ -111,6 +116,12 @@ impl Constants {
 struct Bearing {
     weights: CageWeights,
     balls: BallSet,
+    /// The loaded balls while an integrator holds the regime ([`OdeSystem::hold_regime`]).
+    regime: Regime,
+    /// Whether [`OdeSystem::rhs`] uses `regime` (else the natural law).
+    held: bool,
+    /// Switching margin of the latest right-hand side (m).
+    margin: f64,
 }
 
 /// Kinematics at one `(t, e, ė)`, with every acceleration split as `J ë + a₀`.
@@ -147,9 +158,15 @@ impl MinimalSliderCrank {
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
         let mp = &case.mechanism;
-        let bearing = (case.location != Location::Ideal).then(|| Bearing {
-            weights: CageWeights::of(&case.bearing),
-            balls: BallSet::new(&case.bearing),
+        let bearing = (case.location != Location::Ideal).then(|| {
+            let balls = BallSet::new(&case.bearing);
+            Bearing {
+                weights: CageWeights::of(&case.bearing),
+                regime: balls.no_regime(),
+                balls,
+                held: false,
+                margin: f64::INFINITY,
+            }
         });
         Ok(Self {
             location: case.location,
@@ -183,32 +200,49 @@ impl MinimalSliderCrank {
         vec![0.0; self.dim()]
     }
 
-    /// Kinematics, bearing force and `ë` at `(t, y)`; no force and `ë = 0` for
-    /// the ideal mechanism.
-    fn solve(&mut self, t: f64, y: &[f64]) -> Result<(Kinematics, BallSum, [f64; 2]), ModelError> {
+    /// Kinematics, bearing force and `ë` at `(t, y)`, with the balls loaded as the
+    /// held regime says if `held` (else by the sign of `δ`); no force and `ë = 0`
+    /// for the ideal mechanism.
+    fn solve(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        held: bool,
+    ) -> Result<(Kinematics, BallSum, [f64; 2]), ModelError> {
         let k = &self.k;
+        let crank = k.omega * t;
         let Some(w) = self.bearing.as_mut() else {
             return Ok((
-                k.kinematics(t, [0.0; 2], [0.0; 2])?,
+                k.kinematics(crank.sin_cos(), [0.0; 2], [0.0; 2])?,
                 BallSum::default(),
                 [0.0; 2],
             ));
         };
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
-        let kin = k.kinematics(t, e, ed)?;
-        let crank_turn = k.omega * t;
-        let (journal_turn, housing_turn) = match self.location {
-            Location::CrankRod => (kin.s.atan2(kin.c), crank_turn),
-            _ => (crank_turn, 0.0),
+        let regime = held.then_some(&w.regime);
+        let (kin, sum) = match self.location {
+            // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
+            Location::CrankGround => {
+                let state = w.weights.contact_state(e, ed, crank, 0.0);
+                let (sum, trig) = w.balls.evaluate(&state, regime, crank);
+                (k.kinematics(trig, e, ed)?, sum)
+            }
+            // The journal turns with the rod, whose angle needs the crank's first.
+            _ => {
+                let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+                let state = w.weights.contact_state(e, ed, kin.s.atan2(kin.c), crank);
+                (kin, w.balls.evaluate(&state, regime, 0.0).0)
+            }
         };
-        let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
-        let sum = w.balls.force(&state);
+        w.margin = sum.margin;
         Ok((kin, sum, k.eccentricity_acceleration(&kin, sum.force)))
     }
 
     /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    /// The natural law applies (a ball is loaded when `δ > 0`) whatever regime an
+    /// integrator holds.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
-        let (kin, sum, edd) = self.solve(t, y)?;
+        let (kin, sum, edd) = self.solve(t, y, false)?;
         let k = self.k;
         let (u, tan, cg) = (kin.u, kin.tan, k.crank_moves);
         let theta_dd = kin.k_theta * edd[1] + kin.theta_dd0;
@@ -279,8 +313,40 @@ impl OdeSystem for MinimalSliderCrank {
         if self.bearing.is_none() {
             return Ok(());
         }
-        let (_, _, edd) = self.solve(t, y)?;
+        let held = self.bearing.as_ref().is_some_and(|w| w.held);
+        let (_, _, edd) = self.solve(t, y, held)?;
         dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
         Ok(())
+    }
+
+    fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
+        if self.bearing.is_none() {
+            return Ok(false);
+        }
+        let k = &self.k;
+        let crank = k.omega * t;
+        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+        let (journal_turn, housing_turn) = match self.location {
+            Location::CrankRod => (kin.s.atan2(kin.c), crank),
+            _ => (crank, 0.0),
+        };
+        let Some(w) = self.bearing.as_mut() else {
+            return Ok(false);
+        };
+        let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
+        w.balls.freeze(&state, &mut w.regime);
+        w.held = true;
+        Ok(true)
+    }
+
+    fn release_regime(&mut self) {
+        if let Some(w) = self.bearing.as_mut() {
+            w.held = false;
+        }
+    }
+
+    fn margin(&self) -> f64 {
+        self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
     }
 }

@@ -55,6 +55,11 @@ pub fn metric_specs() -> Vec<VarSpec> {
         VarSpec::new("rejected_steps", "1", "rejected integrator steps"),
         VarSpec::new("rhs_evals", "1", "right-hand-side evaluations"),
         VarSpec::new(
+            "contact_events",
+            "1",
+            "contact switches the integrator located and restarted at",
+        ),
+        VarSpec::new(
             "wall_time",
             "s",
             "wall-clock time of the case (integration, sampling, spectra)",
@@ -172,6 +177,7 @@ pub fn run_case(
         out.stats.steps as f64,
         out.stats.rejected as f64,
         out.stats.rhs_evals as f64,
+        out.stats.events as f64,
         start.elapsed().as_secs_f64(),
     ]);
     debug_assert_eq!(metrics.len(), n_metrics);

@@ -122,12 +122,25 @@ pub(crate) enum Verdict {
 /// `0.9 · err^{−α} · err_prev^{β}`, clamped to [[`MIN_FACTOR`], [`MAX_FACTOR`]],
 /// with `err_prev` the error of the last accepted step. `β = 0` gives the classic
 /// controller `0.9 · err^{−α}`.
+///
+/// A second rejection in a row does not trust the pair's order: near a contact
+/// switch the error falls like `h^q` with `q` far below the order (the Hertz force
+/// `K δ^{3/2}` is not twice differentiable where `δ = 0`), and cutting by
+/// `err^{−α}` alone takes many rejections to get there. The controller measures `q`
+/// from the two rejected attempts, `q = ln(err₁/err₂) / ln(h₁/h₂)`, bounded to
+/// `[1, 1/α₀]` (`α₀ = 1/(q_pair+1)`), and cuts by `0.9 · err₂^{−1/q}`, at most to
+/// [`MIN_FACTOR`] per rejection; when the error did not fall, by [`MIN_FACTOR`].
 #[derive(Debug, Clone)]
 pub(crate) struct StepController {
     alpha: f64,
     beta: f64,
+    /// `1/(q_pair + 1)`: the exponent the pair's error estimate should follow.
+    alpha_pair: f64,
     err_prev: f64,
     rejected_last: bool,
+    /// Step size (s) and error of the last rejected attempt, if the last attempt
+    /// was rejected for its error.
+    last_rejection: Option<(f64, f64)>,
 }
 
 impl StepController {
@@ -136,11 +149,14 @@ impl StepController {
     /// `α = 1/(q+1) − 0.75 β` (HNW I, eq. II.4.43 with Hairer's choice of α; DOPRI5's
     /// `0.2 − 0.75 β`, DOP853's `1/8` at its default β = 0).
     pub fn new(error_order: u32, beta: f64) -> Self {
+        let alpha_pair = 1.0 / f64::from(error_order + 1);
         Self {
-            alpha: 1.0 / f64::from(error_order + 1) - 0.75 * beta,
+            alpha: alpha_pair - 0.75 * beta,
             beta,
+            alpha_pair,
             err_prev: 1e-4,
             rejected_last: false,
+            last_rejection: None,
         }
     }
 
@@ -148,12 +164,13 @@ impl StepController {
     /// so that the next accepted step does not grow.
     pub fn note_failure(&mut self) {
         self.rejected_last = true;
+        self.last_rejection = None;
     }
 
     /// Judges a step of size `h` (s) whose error norm is `err` (≤ 1 passes).
     pub fn judge(&mut self, err: f64, h: f64) -> Verdict {
         if !err.is_finite() {
-            self.rejected_last = true;
+            self.note_failure();
             return Verdict::Reject(h * NON_FINITE_CUT);
         }
         let raw = SAFETY * err.powf(-self.alpha);
@@ -164,10 +181,20 @@ impl StepController {
             }
             self.err_prev = err.max(1e-4);
             self.rejected_last = false;
+            self.last_rejection = None;
             Verdict::Accept(h * factor)
         } else {
+            let factor = match self.last_rejection {
+                Some((h1, e1)) if h1 > h && e1 > err => {
+                    let q = ((e1 / err).ln() / (h1 / h).ln()).clamp(1.0, 1.0 / self.alpha_pair);
+                    SAFETY * err.powf(-1.0 / q)
+                }
+                Some(_) => MIN_FACTOR,
+                None => raw,
+            };
             self.rejected_last = true;
-            Verdict::Reject(h * raw.max(MIN_FACTOR))
+            self.last_rejection = Some((h, err));
+            Verdict::Reject(h * factor.clamp(MIN_FACTOR, SAFETY))
         }
     }
 }

@@ -15,6 +15,8 @@ pub(crate) struct Problem<'a> {
     pub max_steps: u64,
     /// Largest step of an adaptive method (s), positive, possibly infinite.
     pub max_step: f64,
+    /// Whether the explicit adaptive pairs locate regime switches.
+    pub locate_events: bool,
 }
 
 /// Evaluates `f(t, y)` into `dydt`, counting it and mapping a model failure to

@@ -33,6 +33,11 @@ struct Workspace {
     /// The higher terms `F_{3+j}` of the current step's continuous extension,
     /// row-major (state units).
     cont: Vec<f64>,
+    /// Switching margin after each stage of the current step, when events are
+    /// located ([`OdeSystem::margin`]); `+∞` for stages not evaluated.
+    margins: Vec<f64>,
+    /// State at a located event.
+    y_event: Vec<f64>,
 }
 
 impl Workspace {
@@ -48,6 +53,8 @@ impl Workspace {
             out: vec![0.0; n],
             f_end: vec![0.0; n],
             cont: vec![0.0; rows * n],
+            margins: vec![f64::INFINITY; tab.all_stages()],
+            y_event: vec![0.0; n],
         }
     }
 }
@@ -141,6 +148,7 @@ fn take_step<S: OdeSystem>(
         if !matches!(outcome, StepOutcome::Done) {
             return outcome;
         }
+        w.margins[i] = sys.margin();
     }
     if !tab.fsal {
         combine(&w.y, h, tab.b, &w.k, &mut w.y_new);
@@ -203,6 +211,7 @@ fn prepare_dense<S: OdeSystem>(
         if !matches!(outcome, StepOutcome::Done) {
             return outcome;
         }
+        w.margins[s + x] = sys.margin();
     }
     for (row, d) in w.cont.chunks_exact_mut(n).zip(dense.d) {
         for (m, f) in row.iter_mut().enumerate() {
@@ -216,8 +225,16 @@ fn prepare_dense<S: OdeSystem>(
 /// (exponent from `tab.error_order`, gain `tab.pi_beta`), `s − 1` evaluations of
 /// `f` per attempted step plus 2 at the start, and the pair's continuous extension
 /// at sample times inside accepted steps (its extra stages, if any, evaluated only
-/// for steps with such a sample; a trial state there the model cannot evaluate
-/// makes the step a rejected one).
+/// for steps with such a sample or an event; a trial state there the model cannot
+/// evaluate makes the step a rejected one).
+///
+/// With [`Problem::locate_events`] and a system with regimes, every step runs with
+/// the regime of its start held fixed, so `f` is smooth across it. When a stage's
+/// switching margin turns negative, the switch is located on the accepted step's
+/// continuous extension ([`locate`]); the step is cut there, and the run restarts
+/// from that state in the new regime with a fresh first stage. Stepping across a
+/// switch instead (where the compression-only damping force jumps and the Hertz force
+/// loses smoothness) costs cascades of rejected steps and an error of order `h`.
 pub(crate) fn adaptive<S, O>(
     sys: &mut S,
     tab: &ExplicitTableau,
@@ -234,8 +251,14 @@ where
     let mut w = Workspace::new(p.y0, tab);
     let n = w.n;
     let mut stats = Stats::default();
+    let events = p.locate_events
+        && sys
+            .hold_regime(p.t0, p.y0)
+            .map_err(|source| SolveError::Model { t: p.t0, source })?;
     samples.serve_start(sys, p.t0, p.y0)?;
     eval(sys, p.t0, p.y0, &mut w.k[..n], &mut stats)?;
+    // Switching margin at the start of the current step (≥ 0).
+    let mut start_margin = sys.margin();
     let mut h = initial_step(
         sys,
         p,
@@ -252,6 +275,7 @@ where
     loop {
         let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
         h = h_try;
+        w.margins.fill(f64::INFINITY);
         let err = match take_step(sys, tab, (t, h), &mut w, &mut stats) {
             StepOutcome::NonFinite { .. } => f64::NAN,
             StepOutcome::ModelFailed(e) => {
@@ -268,8 +292,11 @@ where
             }
             Verdict::Accept(h_new) => h_new,
         };
-        let t_new = if last { p.t_end } else { t + h };
-        if let Some(dense) = tab.dense.as_ref().filter(|_| samples.pending_before(t_new)) {
+        let t_end = if last { p.t_end } else { t + h };
+        // Stage 0 is the step's start, in the regime by construction.
+        let crossed = events && w.margins[1..].iter().any(|&m| m < 0.0);
+        let need_dense = crossed || samples.pending_before(t_end);
+        if let Some(dense) = tab.dense.as_ref().filter(|_| need_dense) {
             match prepare_dense(sys, tab, dense, (t, h), &mut w, &mut stats) {
                 StepOutcome::Done => {}
                 failed => {
@@ -285,27 +312,155 @@ where
         }
         stats.steps += 1;
         model_failure = None;
-        accept(sys, t_new, &w.y_new)?;
-        let ends = StepEnds {
-            t0: t,
-            h,
-            y0: &w.y,
-            y1: &w.y_new,
-            f0: &w.k[..n],
-            f1: &w.k[(s - 1) * n..s * n],
+        let event = {
+            let Workspace {
+                k,
+                y,
+                y_new,
+                out,
+                f_end,
+                cont,
+                margins,
+                y_event,
+                ..
+            } = &mut w;
+            let ends = StepEnds {
+                t0: t,
+                h,
+                y0: y,
+                y1: y_new,
+                f0: &k[..n],
+                f1: &k[(s - 1) * n..s * n],
+            };
+            let event = if crossed {
+                let nodes = tab.c.iter().chain(tab.dense.iter().flat_map(|d| d.c));
+                let nodes = nodes.copied().zip(margins.iter().copied()).skip(1);
+                locate(
+                    sys,
+                    &ends,
+                    cont,
+                    (start_margin, nodes),
+                    (y_event, f_end),
+                    &mut stats,
+                )?
+            } else {
+                None
+            };
+            let (t_serve, y_serve): (f64, &[f64]) = match event {
+                Some(theta) => (t + theta * h, y_event),
+                None => (t_end, y_new),
+            };
+            accept(sys, t_serve, y_serve)?;
+            samples.serve(sys, t_serve, y_serve, out, |ts, o| {
+                ends.continuous(ends.theta(ts), cont, o);
+            })?;
+            event
         };
-        let cont = &w.cont;
-        samples.serve(sys, t_new, &w.y_new, &mut w.out, |ts, out| {
-            ends.continuous(ends.theta(ts), cont, out);
-        })?;
-        if last {
-            return Ok(stats);
+        let Some(theta) = event else {
+            start_margin = w.margins[s - 1];
+            if last {
+                return Ok(stats);
+            }
+            std::mem::swap(&mut w.y, &mut w.y_new);
+            w.k.copy_within((s - 1) * n..s * n, 0);
+            t = t_end;
+            h = h_new;
+            continue;
+        };
+        // The switch. The new regime is the one of the located state just past it
+        // (where the crossing was seen); the state there comes from a step of the
+        // pair's full order from `t` (the continuous extension is an order lower,
+        // which at tight tolerances would dominate the error), taken in the held
+        // regime, in which the trajectory is smooth up to the switch.
+        stats.events += 1;
+        let h_event = theta * h;
+        let t_new = t + h_event;
+        let redone = take_step(sys, tab, (t, h_event), &mut w, &mut stats);
+        sys.hold_regime(t_new, &w.y_event)
+            .map_err(|source| SolveError::Model { t: t_new, source })?;
+        if let StepOutcome::Done = redone {
+            w.y_event.copy_from_slice(&w.y_new);
         }
-        std::mem::swap(&mut w.y, &mut w.y_new);
-        w.k.copy_within((s - 1) * n..s * n, 0);
+        std::mem::swap(&mut w.y, &mut w.y_event);
+        eval(sys, t_new, &w.y, &mut w.k[..n], &mut stats)?;
+        start_margin = sys.margin();
         t = t_new;
         h = h_new;
     }
+}
+
+/// Relative width (of the step) to which [`locate`] narrows a switch: far below
+/// any step's error, e.g. `1e-14 s` on a `100 µs` step.
+const EVENT_RESOLUTION: f64 = 1e-10;
+
+/// Locates the first regime switch of an accepted step on its continuous extension
+/// `ends` + `cont`, given the switching margin at its start (`≥ 0`) and each
+/// stage's node and margin in `stages`: the switching margin `g(θ)` of the held
+/// regime is evaluated along the extension, at the earliest stage node where it is
+/// negative (the step's end included), to bracket a sign change, which the
+/// Illinois variant of regula falsi then narrows to [`EVENT_RESOLUTION`]
+/// (bisecting when the secant point falls on an end, stopping when no time between
+/// the ends is left). Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the state there in `y_event`,
+/// or `None` when the extension does not cross (a stage state strayed, the
+/// trajectory did not). `f_end` is scratch for the slopes; each `g` costs one
+/// evaluation of `f`.
+fn locate<S: OdeSystem>(
+    sys: &mut S,
+    ends: &StepEnds<'_>,
+    cont: &[f64],
+    (g0, stages): (f64, impl Iterator<Item = (f64, f64)>),
+    (y_event, f_end): (&mut [f64], &mut [f64]),
+    stats: &mut Stats,
+) -> Result<Option<f64>, SolveError> {
+    let mut g = |theta: f64, y: &mut [f64]| -> Result<f64, SolveError> {
+        ends.continuous(theta, cont, y);
+        eval(sys, ends.t0 + theta * ends.h, y, f_end, stats)?;
+        Ok(sys.margin())
+    };
+    let mut nodes: Vec<f64> = stages.filter(|&(_, m)| m < 0.0).map(|(c, _)| c).collect();
+    nodes.sort_by(f64::total_cmp);
+    nodes.dedup();
+    let mut bracket = None;
+    for c in nodes {
+        let gc = g(c, y_event)?;
+        if gc < 0.0 {
+            bracket = Some((c, gc));
+            break;
+        }
+    }
+    let Some((mut b, mut gb)) = bracket else {
+        return Ok(None);
+    };
+    let (mut a, mut ga) = (0.0, g0.max(0.0));
+    let mut side = 0;
+    let time = |theta: f64| ends.t0 + theta * ends.h;
+    while b - a > EVENT_RESOLUTION {
+        let resolved = |m: f64| m > a && m < b && time(m) != time(a) && time(m) != time(b);
+        let mut m = (a * gb - b * ga) / (gb - ga);
+        if !resolved(m) {
+            // The secant point is not strictly inside in time: bisect instead.
+            m = 0.5 * (a + b);
+            if !resolved(m) {
+                break;
+            }
+        }
+        let gm = g(m, y_event)?;
+        if gm < 0.0 {
+            (b, gb) = (m, gm);
+            if side == -1 {
+                ga *= 0.5;
+            }
+            side = -1;
+        } else {
+            (a, ga) = (m, gm);
+            if side == 1 {
+                gb *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    ends.continuous(b, cont, y_event);
+    Ok(Some(b))
 }
 
 /// Classic RK4 with fixed step `step` (s): step `i` starts at `t0 + i·step`, the last

@@ -33,6 +33,28 @@ pub trait OdeSystem {
         let _ = (t, y);
         Ok(())
     }
+
+    /// Piecewise-smooth systems (contact switching on and off) hold their discrete
+    /// regime fixed at the one of `(t, y)`: until the next call or
+    /// [`OdeSystem::release_regime`], [`OdeSystem::rhs`] applies that regime's law
+    /// continued smoothly past its switching surfaces, and [`OdeSystem::margin`]
+    /// says how far the state is from them. Returns whether the system has regimes;
+    /// the default has none and returns `false`.
+    fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
+        let _ = (t, y);
+        Ok(false)
+    }
+
+    /// Back to the natural law: `rhs` picks the regime from the state itself.
+    /// Every integration starts with it. Does nothing by default.
+    fn release_regime(&mut self) {}
+
+    /// Switching margin of the latest [`OdeSystem::rhs`] evaluation (state units):
+    /// `≥ 0` while the held regime matches the state, negative once the state has
+    /// crossed a switching surface; `+∞` by default.
+    fn margin(&self) -> f64 {
+        f64::INFINITY
+    }
 }
 
 /// Which integrator to use, with its accuracy setting.
@@ -94,15 +116,21 @@ pub struct SolverSettings {
     pub max_steps: u64,
     /// Largest step an adaptive method may take (s); `f64::INFINITY` for no limit.
     pub max_step: f64,
+    /// Whether the explicit adaptive pairs locate the regime switches of a
+    /// piecewise-smooth system ([`OdeSystem::hold_regime`]) and restart there,
+    /// instead of stepping across them. On by default; other methods ignore it.
+    pub locate_events: bool,
 }
 
 impl SolverSettings {
-    /// Settings for `method` with a budget of 10 million steps and no step limit.
+    /// Settings for `method` with a budget of 10 million steps, no step limit, and
+    /// event location on.
     pub fn new(method: Method) -> Self {
         Self {
             method,
             max_steps: 10_000_000,
             max_step: f64::INFINITY,
+            locate_events: true,
         }
     }
 }
@@ -120,6 +148,9 @@ pub struct Stats {
     pub jacobians: u64,
     /// LU factorisations of the iteration matrix (implicit methods only).
     pub factorizations: u64,
+    /// Regime switches located and restarted at (explicit adaptive pairs with
+    /// [`SolverSettings::locate_events`]); each also counts as an accepted step.
+    pub events: u64,
 }
 
 /// Why an integration stopped early.
@@ -235,7 +266,9 @@ where
         t_end,
         max_steps: settings.max_steps,
         max_step: settings.max_step,
+        locate_events: settings.locate_events,
     };
+    sys.release_regime();
     let pair = |tableau, rtol, atol| (tableau, control::Tolerance { rtol, atol });
     let (tableau, tol) = match settings.method {
         Method::DormandPrince { rtol, atol } => pair(&tableau::DORMAND_PRINCE, rtol, atol),
