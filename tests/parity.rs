@@ -327,3 +327,67 @@ proptest! {
         prop_assert!(sum.loaded.abs_diff(loaded) <= marginal, "loaded {} vs {}", sum.loaded, loaded);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// A held regime: frozen at one state it gives that state's force back; at
+    /// another state its balls follow the continued law `K δ |δ|^{1/2}` (plus
+    /// damping) whatever the sign of `δ`, the others carry nothing, and the margin
+    /// is the smallest `±δ` (negative once a ball has switched).
+    #[test]
+    fn held_regime_continues_the_law_and_reports_the_margin(
+        balls in 3usize..40,
+        damping in prop_oneof![Just(0.0), 1.0f64..1e4],
+        two_sided in any::<bool>(),
+        r in prop::array::uniform2(0.0f64..30e-6),
+        angle in prop::array::uniform2(-10.0f64..10.0),
+        v in prop::array::uniform2(-0.5f64..0.5),
+        turns in prop::array::uniform2(-40.0f64..40.0),
+    ) {
+        let model = if two_sided { DampingModel::TwoSided } else { DampingModel::CompressionOnly };
+        let params = kernel_params(balls, damping, model);
+        let mut set = BallSet::new(&params);
+        let weights = CageWeights::of(&params);
+        let at = |i: usize| weights.contact_state(
+            [r[i] * angle[i].cos(), r[i] * angle[i].sin()], v, turns[0], turns[1]);
+        let (frozen_at, moved) = (at(0), at(1));
+        let mut regime = set.no_regime();
+        set.freeze(&frozen_at, &mut regime);
+
+        let natural = set.force(&frozen_at);
+        let held = set.force_in(&frozen_at, &regime);
+        let scale = 1e-12 * natural.force[0].abs().max(natural.force[1].abs()) + 1e-20;
+        prop_assert!((held.force[0] - natural.force[0]).abs() <= scale);
+        prop_assert!((held.force[1] - natural.force[1]).abs() <= scale);
+        prop_assert_eq!(held.loaded, natural.loaded);
+        prop_assert!(held.margin >= 0.0 && natural.margin == f64::INFINITY);
+
+        let in_regime: Vec<bool> = (0..balls).map(|b| set.ball(b, &frozen_at).delta > 0.0).collect();
+        let sum = set.force_in(&moved, &regime);
+        let k = params.stiffness;
+        let (mut fx, mut fy, mut margin, mut largest) = (0.0, 0.0, f64::INFINITY, 0.0_f64);
+        for (b, &loaded) in in_regime.iter().enumerate() {
+            let ball = set.ball(b, &moved);
+            margin = margin.min(if loaded { ball.delta } else { -ball.delta });
+            if !loaded {
+                continue;
+            }
+            let elastic = k * ball.delta * ball.delta.abs().sqrt();
+            // C = 0 is the undamped law, which never clips the continued force.
+            let f = match model {
+                _ if damping == 0.0 => elastic,
+                DampingModel::CompressionOnly => elastic + damping * ball.approach.max(0.0),
+                DampingModel::TwoSided => (elastic + damping * ball.approach).max(0.0),
+            };
+            fx += f * ball.normal[0];
+            fy += f * ball.normal[1];
+            largest = largest.max(f.abs());
+        }
+        let tol = 1e-12 * largest + 1e-9;
+        prop_assert!((sum.force[0] - fx).abs() <= tol, "Fx {} vs {}", sum.force[0], fx);
+        prop_assert!((sum.force[1] - fy).abs() <= tol, "Fy {} vs {}", sum.force[1], fy);
+        prop_assert_eq!(sum.loaded, in_regime.iter().filter(|&&l| l).count());
+        prop_assert!((sum.margin - margin).abs() <= 1e-18, "margin {} vs {}", sum.margin, margin);
+    }
+}
