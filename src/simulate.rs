@@ -151,7 +151,8 @@ pub fn channel_values(s: &Sample, location: Location) -> [f64; CHANNELS.len()] {
     [
         s.slider_acceleration,
         s.crank_moment,
-        f[0].hypot(f[1]),
+        // Forces are far from overflow: no need for `hypot`'s scaling.
+        (f[0] * f[0] + f[1] * f[1]).sqrt(),
         f[0],
         f[1],
         s.eccentricity[0],

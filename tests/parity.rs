@@ -388,6 +388,9 @@ proptest! {
         prop_assert!((sum.force[0] - fx).abs() <= tol, "Fx {} vs {}", sum.force[0], fx);
         prop_assert!((sum.force[1] - fy).abs() <= tol, "Fy {} vs {}", sum.force[1], fy);
         prop_assert_eq!(sum.loaded, in_regime.iter().filter(|&&l| l).count());
-        prop_assert!((sum.margin - margin).abs() <= 1e-18, "margin {} vs {}", sum.margin, margin);
+        // The kernel builds each waviness height from rotations of one phase `N ψ`,
+        // the twin from `N (α + ψ)`: phases of ~1e3 rad round at ~1e-13 rad, which
+        // the µm amplitudes turn into ~1e-18 m.
+        prop_assert!((sum.margin - margin).abs() <= 1e-17, "margin {} vs {}", sum.margin, margin);
     }
 }

@@ -315,7 +315,7 @@ impl BallSet {
     /// `F = Σ F_r n_r`, the loaded-ball count and the switching margin at state `s`
     /// under the natural law (a ball is loaded when `δ_r > 0`). No allocation.
     pub fn force(&mut self, s: &ContactState) -> BallSum {
-        self.evaluate(s, None, 0.0).0
+        self.evaluate(s, None, None).0
     }
 
     /// As [`BallSet::force`], with the balls of `regime` loaded whatever the sign of
@@ -323,22 +323,26 @@ impl BallSet {
     /// continued as `K δ |δ|^{1/2}`, so the force stays smooth while the state moves
     /// on past a switch, and [`BallSum::margin`] turns negative.
     pub fn force_in(&mut self, s: &ContactState, regime: &Regime) -> BallSum {
-        self.evaluate(s, Some(regime), 0.0).0
+        self.evaluate(s, Some(regime), None).0
     }
 
     /// [`BallSet::force_in`] with `regime`, or [`BallSet::force`] without, and the
-    /// `(sin, cos)` of a caller's `angle` (rad) from the same SIMD `sin_cos` as the
-    /// kernel's own angles (with up to two waviness harmonics, it adds nothing).
+    /// `(sin, cos)` of a caller's `angle` (rad), if any, from the same SIMD `sin_cos`
+    /// as the kernel's own angles (with up to two waviness harmonics, it adds
+    /// nothing); `(0, 1)` without one.
     pub fn evaluate(
         &mut self,
         s: &ContactState,
         regime: Option<&Regime>,
-        angle: f64,
+        angle: Option<f64>,
     ) -> (BallSum, (f64, f64)) {
         let extra = 1 + self.waves.len();
-        self.angles[extra] = angle;
-        self.prepare(s);
-        let trig = (self.sines[extra], self.cosines[extra]);
+        self.angles[extra] = angle.unwrap_or(0.0);
+        self.prepare(s, extra + usize::from(angle.is_some()));
+        let trig = match angle {
+            Some(_) => (self.sines[extra], self.cosines[extra]),
+            None => (0.0, 1.0),
+        };
         let sum = match regime {
             Some(r) => self.sum(s, Held(&r.loaded)),
             None => self.sum(s, Natural),
@@ -355,7 +359,7 @@ impl BallSet {
 
     /// Sets `regime` to the balls loaded at state `s` under the natural law.
     pub fn freeze(&mut self, s: &ContactState, regime: &mut Regime) {
-        self.prepare(s);
+        self.prepare(s, 1 + self.waves.len());
         let offset = self.current_offsets();
         let (sc, cc) = (self.sines[0], self.cosines[0]);
         let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
@@ -401,7 +405,10 @@ impl BallSet {
     /// Computes the sines and cosines of the cage angle, the wave phases at `s` and
     /// the caller's angle ([`LANES`] per `sin_cos`) and fills the per-ball offsets
     /// when the set is wavy.
-    fn prepare(&mut self, s: &ContactState) {
+    ///
+    /// The first `used` angles are needed. Two or fewer take the scalar `sin_cos`,
+    /// which is cheaper than one [`sin_cos4`] for them.
+    fn prepare(&mut self, s: &ContactState, used: usize) {
         self.angles[0] = s.cage;
         for (a, w) in self.angles[1..].iter_mut().zip(&self.waves) {
             let psi = match w.race {
@@ -410,15 +417,26 @@ impl BallSet {
             };
             *a = w.number * psi + w.phase;
         }
-        for ((a, sn), cs) in self
-            .angles
-            .chunks_exact(LANES)
-            .zip(self.sines.chunks_exact_mut(LANES))
-            .zip(self.cosines.chunks_exact_mut(LANES))
-        {
-            let (vs, vc) = sin_cos4([a[0], a[1], a[2], a[3]]);
-            sn.copy_from_slice(&vs);
-            cs.copy_from_slice(&vc);
+        if used <= 2 {
+            for ((a, sn), cs) in self.angles[..used]
+                .iter()
+                .zip(&mut self.sines)
+                .zip(&mut self.cosines)
+            {
+                (*sn, *cs) = a.sin_cos();
+            }
+        } else {
+            for ((a, sn), cs) in self
+                .angles
+                .chunks_exact(LANES)
+                .zip(self.sines.chunks_exact_mut(LANES))
+                .zip(self.cosines.chunks_exact_mut(LANES))
+                .take(used.div_ceil(LANES))
+            {
+                let (vs, vc) = sin_cos4([a[0], a[1], a[2], a[3]]);
+                sn.copy_from_slice(&vs);
+                cs.copy_from_slice(&vc);
+            }
         }
         if !self.waves.is_empty() {
             fill_offsets(

@@ -224,14 +224,14 @@ impl MinimalSliderCrank {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
             Location::CrankGround => {
                 let state = w.weights.contact_state(e, ed, crank, 0.0);
-                let (sum, trig) = w.balls.evaluate(&state, regime, crank);
+                let (sum, trig) = w.balls.evaluate(&state, regime, Some(crank));
                 (k.kinematics(trig, e, ed)?, sum)
             }
             // The journal turns with the rod, whose angle needs the crank's first.
             _ => {
                 let kin = k.kinematics(crank.sin_cos(), e, ed)?;
                 let state = w.weights.contact_state(e, ed, kin.s.atan2(kin.c), crank);
-                (kin, w.balls.evaluate(&state, regime, 0.0).0)
+                (kin, w.balls.evaluate(&state, regime, None).0)
             }
         };
         w.margin = sum.margin;

@@ -122,21 +122,23 @@ pub fn run_case(
         simulate: cpu_simulated - cpu_start,
         analysis: 0.0,
     };
+    // A failure keeps no series; its metrics are NaN but for the wall time (last).
+    let failed = |message: String, cost: CaseCost| {
+        let mut metrics = vec![f64::NAN; n_metrics];
+        metrics[n_metrics - 1] = start.elapsed().as_secs_f64();
+        CaseResult {
+            row,
+            status: Status::Failed,
+            message,
+            series: Vec::new(),
+            spectra: Vec::new(),
+            metrics,
+            cost,
+        }
+    };
     let out = match simulated {
         Ok(out) => out,
-        Err(e) => {
-            let mut metrics = vec![f64::NAN; n_metrics];
-            metrics[n_metrics - 1] = start.elapsed().as_secs_f64();
-            return CaseResult {
-                row,
-                status: Status::Failed,
-                message: e.to_string(),
-                series: Vec::new(),
-                spectra: Vec::new(),
-                metrics,
-                cost,
-            };
-        }
+        Err(e) => return failed(e.to_string(), cost),
     };
     let k0 = window_start(study);
     let mut spectra = Vec::with_capacity(study.spectrum_channels.len());
@@ -144,15 +146,7 @@ pub fn run_case(
         let series = out.channel(ch).expect("spectrum channels are validated");
         let mut amp = vec![0.0; plan.bins()];
         if let Err(e) = plan.amplitude(&series[k0..], &mut amp) {
-            return CaseResult {
-                row,
-                status: Status::Failed,
-                message: e.to_string(),
-                series: Vec::new(),
-                spectra: Vec::new(),
-                metrics: vec![f64::NAN; n_metrics],
-                cost,
-            };
+            return failed(e.to_string(), cost);
         }
         spectra.push(amp);
     }

@@ -110,24 +110,31 @@ impl StepEnds<'_> {
         let h = self.h;
         let n = out.len();
         let rows = higher.len().checked_div(n).unwrap_or(0);
+        // The nested form expanded: term j carries θ^⌈(j+1)/2⌉ θ₁^⌊(j+1)/2⌋, the
+        // same for every component, so the weights are computed once.
+        let mut weights = [0.0; 3 + MAX_HIGHER_TERMS];
+        let mut w = 1.0;
+        for (j, wj) in weights.iter_mut().take(3 + rows).enumerate() {
+            w *= if j % 2 == 0 { theta } else { th1 };
+            *wj = w;
+        }
         for (i, o) in out.iter_mut().enumerate() {
             let delta = self.y1[i] - self.y0[i];
             let hf0 = h * self.f0[i];
             let hf1 = h * self.f1[i];
-            let hermite = [delta, hf0 - delta, 2.0 * delta - hf0 - hf1];
-            let mut acc = 0.0;
-            for j in (0..3 + rows).rev() {
-                let f = if j < 3 {
-                    hermite[j]
-                } else {
-                    higher[(j - 3) * n + i]
-                };
-                acc = (acc + f) * if j % 2 == 0 { theta } else { th1 };
+            let mut acc = weights[0] * delta
+                + weights[1] * (hf0 - delta)
+                + weights[2] * (2.0 * delta - hf0 - hf1);
+            for (r, wr) in weights[3..3 + rows].iter().enumerate() {
+                acc += wr * higher[r * n + i];
             }
             *o = self.y0[i] + acc;
         }
     }
 }
+
+/// Most higher terms `F_{3+j}` a continuous extension has (DOP853: 4).
+pub(crate) const MAX_HIGHER_TERMS: usize = 4;
 
 #[cfg(test)]
 mod tests {

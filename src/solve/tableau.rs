@@ -918,6 +918,17 @@ mod tests {
     }
 
     #[test]
+    fn continuous_extensions_fit_the_interpolator() {
+        for t in [&DORMAND_PRINCE, &TSITOURAS5, &DOP853] {
+            let rows = t.dense.as_ref().map_or(0, |d| d.d.len());
+            assert!(
+                rows <= super::super::output::MAX_HIGHER_TERMS,
+                "{rows} rows"
+            );
+        }
+    }
+
+    #[test]
     fn sdirk4_orders_four_and_three_and_l_stability() {
         let t = &SDIRK4;
         let a = square(t.a);
