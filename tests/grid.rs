@@ -254,6 +254,32 @@ fn invalid_grids_are_refused_with_place_field_and_reason() {
             &["grid.yaml:5:", "solver.rtol", "> 0"],
         ),
         (
+            "solver:\n  method: dopri5\n  step: 1e-5\ngrid:\n  rpm: [300]\n",
+            &[
+                "grid.yaml:6:",
+                "solver.step",
+                "not allowed with method dopri5",
+                "rtol",
+            ],
+        ),
+        (
+            "solver:\n  method: rk4\n  rtol: 1e-6\ngrid:\n  rpm: [300]\n",
+            &[
+                "grid.yaml:6:",
+                "solver.rtol",
+                "not allowed with method rk4",
+                "fixed `step`",
+            ],
+        ),
+        (
+            "solver:\n  method: sdirk4\n  locate_events: false\ngrid:\n  rpm: [300]\n",
+            &[
+                "grid.yaml:6:",
+                "solver.locate_events",
+                "not allowed with method sdirk4",
+            ],
+        ),
+        (
             "output:\n  compression: 12\ngrid:\n  rpm: [300]\n",
             &["grid.yaml:5:", "output.compression", "0..=9"],
         ),

@@ -171,6 +171,8 @@ pub struct SolverSection {
     pub max_steps: Option<S<u64>>,
     /// Largest adaptive step (s).
     pub max_step: Option<S<Scalar>>,
+    /// Whether the explicit pairs locate contact switches (default `true`).
+    pub locate_events: Option<S<bool>>,
 }
 
 /// `spectra:` settings.

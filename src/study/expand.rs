@@ -823,7 +823,44 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
             ));
         }
     };
+    // A setting the chosen method would ignore is refused, not dropped silently.
+    let method_name = s.method.as_ref().map_or("dopri5", |m| m.value.as_str());
+    let given =
+        |v: &Option<S<Scalar>>| v.as_ref().map(|v| (at(&v.referenced), v.value.to_string()));
+    let events = s
+        .locate_events
+        .as_ref()
+        .map(|v| (at(&v.referenced), v.value.to_string()));
+    let (ignored, takes) = match method {
+        Method::Rk4 { .. } => (
+            vec![
+                ("rtol", given(&s.rtol)),
+                ("atol", given(&s.atol)),
+                ("max_step", given(&s.max_step)),
+                ("locate_events", events),
+            ],
+            "a fixed `step` (s)",
+        ),
+        Method::Sdirk4 { .. } => (
+            vec![("step", given(&s.step)), ("locate_events", events)],
+            "`rtol`, `atol` and `max_step`",
+        ),
+        _ => (
+            vec![("step", given(&s.step))],
+            "`rtol`, `atol`, `max_step` and `locate_events`",
+        ),
+    };
+    if let Some((field, Some((place, value)))) = ignored.into_iter().find(|(_, v)| v.is_some()) {
+        return Err(ctx.err(
+            Some(place),
+            &format!("solver.{field}"),
+            format!("{value} is not allowed with method {method_name}, which takes {takes}"),
+        ));
+    }
     let mut settings = SolverSettings::new(method);
+    if let Some(l) = &s.locate_events {
+        settings.locate_events = l.value;
+    }
     if let Some(m) = &s.max_steps {
         settings.max_steps = m.value;
     }
