@@ -231,8 +231,10 @@ fn prepare_dense<S: OdeSystem>(
 /// With [`Problem::locate_events`] and a system with regimes, every step runs with
 /// the regime of its start held fixed, so `f` is smooth across it. When a stage's
 /// switching margin turns negative, the switch is located on the accepted step's
-/// continuous extension ([`locate`]); the step is cut there, and the run restarts
-/// from that state in the new regime with a fresh first stage. Stepping across a
+/// continuous extension ([`locate`]); the step is cut there (samples up to the
+/// switch come from its extension), the state at the switch is recomputed by a step
+/// of the pair's full order ending on it, and the run restarts from there in the new
+/// regime with a fresh first stage. Stepping across a
 /// switch instead (where the compression-only damping force jumps and the Hertz force
 /// loses smoothness) costs cascades of rejected steps and an error of order `h`.
 pub(crate) fn adaptive<S, O>(
