@@ -18,6 +18,7 @@
 //!    twin's direct `sin(N ψ_r)` round differently as `N ψ` grows).
 
 use proptest::prelude::*;
+use studyrun::bearing::kernel::APPROACH_MARGIN_TIME;
 use studyrun::bearing::{BallSet, BearingParams, DampingModel, Harmonic, RaceWaviness};
 use studyrun::bearing::{CageWeights, ContactState};
 use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, Sample, SliderCrank};
@@ -332,9 +333,11 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(128))]
 
     /// A held regime: frozen at one state it gives that state's force back; at
-    /// another state its balls follow the continued law `K δ |δ|^{1/2}` (plus
-    /// damping) whatever the sign of `δ`, the others carry nothing, and the margin
-    /// is the smallest `±δ` (negative once a ball has switched).
+    /// another state its balls follow the continued law `K δ |δ|^{1/2}` whatever the
+    /// sign of `δ` (with compression-only damping `C v_r` on the balls that were
+    /// pushing, whatever its sign now), the others carry nothing, and the margin is
+    /// the smallest `±δ` and (compression-only) `±v_r` × `APPROACH_MARGIN_TIME`,
+    /// negative once a ball has switched.
     #[test]
     fn held_regime_continues_the_law_and_reports_the_margin(
         balls in 3usize..40,
@@ -363,7 +366,10 @@ proptest! {
         prop_assert_eq!(held.loaded, natural.loaded);
         prop_assert!(held.margin >= 0.0 && natural.margin == f64::INFINITY);
 
-        let in_regime: Vec<bool> = (0..balls).map(|b| set.ball(b, &frozen_at).delta > 0.0).collect();
+        let frozen: Vec<_> = (0..balls).map(|b| set.ball(b, &frozen_at)).collect();
+        let in_regime: Vec<bool> = frozen.iter().map(|b| b.delta > 0.0).collect();
+        // The compression-only law also switches where v_r changes sign: held too.
+        let approach_switches = damping > 0.0 && model == DampingModel::CompressionOnly;
         let sum = set.force_in(&moved, &regime);
         let k = params.stiffness;
         let (mut fx, mut fy, mut margin, mut largest) = (0.0, 0.0, f64::INFINITY, 0.0_f64);
@@ -373,11 +379,17 @@ proptest! {
             if !loaded {
                 continue;
             }
+            let pushing = frozen[b].approach > 0.0;
+            if approach_switches {
+                let v = if pushing { ball.approach } else { -ball.approach };
+                margin = margin.min(v * APPROACH_MARGIN_TIME);
+            }
             let elastic = k * ball.delta * ball.delta.abs().sqrt();
             // C = 0 is the undamped law, which never clips the continued force.
             let f = match model {
                 _ if damping == 0.0 => elastic,
-                DampingModel::CompressionOnly => elastic + damping * ball.approach.max(0.0),
+                DampingModel::CompressionOnly if pushing => elastic + damping * ball.approach,
+                DampingModel::CompressionOnly => elastic,
                 DampingModel::TwoSided => (elastic + damping * ball.approach).max(0.0),
             };
             fx += f * ball.normal[0];

@@ -71,6 +71,8 @@ pub struct BallSum {
 pub struct Regime {
     /// All bits set in the lanes of loaded balls, [`LANES`] balls per vector.
     loaded: Vec<f64x4>,
+    /// All bits set in the lanes where the compression-only damping acts (`v_r > 0`).
+    pushing: Vec<f64x4>,
 }
 
 /// One ball, evaluated on its own by [`BallSet::ball`].
@@ -95,10 +97,20 @@ pub struct Ball {
 /// A damping law of loaded balls: the ball forces of [`LANES`] balls from their
 /// elastic parts, approach speeds and load mask, without branching.
 pub trait DampingLaw: Copy {
-    /// Ball forces (N) from `elastic = K δ₊^{3/2}` (N), approach speeds `v_r` (m/s)
-    /// and `loaded` (all bits set where `δ > 0`, else 0).
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4;
+    /// Whether the law switches where a loaded ball's approach speed `v_r` changes
+    /// sign (the compression-only law's `max(v_r, 0)`), a switch an event-locating
+    /// integrator should find like a contact onset.
+    const SWITCHES_ON_APPROACH: bool;
+    /// Ball forces (N) from `elastic = K δ₊^{3/2}` (N), approach speeds `v_r` (m/s),
+    /// `loaded` (all bits set where the ball is loaded, else 0) and `pushing` (all
+    /// bits set where the damping acts: `v_r > 0`, or as a held regime says).
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, pushing: f64x4) -> f64x4;
 }
+
+/// Weight (s) of an approach-speed switch in [`BallSum::margin`]: `v_r` (m/s) counts
+/// as the distance it covers in this time. Only the sign matters for finding the
+/// switch; the weight keeps the margin's values in metres of a plausible size.
+pub const APPROACH_MARGIN_TIME: f64 = 1e-4;
 
 /// Whether the lanes' balls are loaded: by the sign of `δ` (the natural law), or as
 /// a held [`Regime`] says.
@@ -107,18 +119,34 @@ trait LoadRule: Copy {
     /// the elastic force `K d |d|^{1/2}` takes: `δ` on loaded lanes, 0 elsewhere
     /// (so that unloaded lanes take the square root of 0).
     fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4);
+    /// Where the compression-only damping acts, given the approach speeds `v_r`.
+    fn pushing(self, i: usize, v_r: f64x4) -> f64x4;
     /// `margin` lowered by the lanes' signed distances from switching: `δ` where
-    /// loaded, `−δ` where not. The natural law cannot switch and leaves it alone.
-    fn margin(self, margin: f64x4, mask: f64x4, delta: f64x4) -> f64x4;
+    /// loaded, `−δ` where not, and with `approach` also `±v_r` ×
+    /// [`APPROACH_MARGIN_TIME`] on loaded lanes (`+` where pushing). The natural
+    /// law cannot switch and leaves it alone.
+    fn margin(self, margin: f64x4, lane: LaneState, approach: bool) -> f64x4;
+}
+
+/// One lane vector's contact quantities, for [`LoadRule::margin`].
+#[derive(Clone, Copy)]
+struct LaneState {
+    delta: f64x4,
+    v_r: f64x4,
+    loaded: f64x4,
+    pushing: f64x4,
 }
 
 /// Loaded where `δ > 0`.
 #[derive(Clone, Copy)]
 struct Natural;
 
-/// Loaded as a held regime says.
+/// Loaded and pushing as a held regime says.
 #[derive(Clone, Copy)]
-struct Held<'a>(&'a [f64x4]);
+struct Held<'a> {
+    loaded: &'a [f64x4],
+    pushing: &'a [f64x4],
+}
 
 impl LoadRule for Natural {
     #[inline(always)]
@@ -127,7 +155,12 @@ impl LoadRule for Natural {
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, _mask: f64x4, _delta: f64x4) -> f64x4 {
+    fn pushing(self, _i: usize, v_r: f64x4) -> f64x4 {
+        v_r.simd_gt(f64x4::ZERO)
+    }
+
+    #[inline(always)]
+    fn margin(self, margin: f64x4, _lane: LaneState, _approach: bool) -> f64x4 {
         margin
     }
 }
@@ -135,13 +168,23 @@ impl LoadRule for Natural {
 impl LoadRule for Held<'_> {
     #[inline(always)]
     fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4) {
-        (self.0[i], delta & self.0[i])
+        (self.loaded[i], delta & self.loaded[i])
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, mask: f64x4, delta: f64x4) -> f64x4 {
+    fn pushing(self, i: usize, _v_r: f64x4) -> f64x4 {
+        self.pushing[i]
+    }
+
+    #[inline(always)]
+    fn margin(self, margin: f64x4, l: LaneState, approach: bool) -> f64x4 {
         // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone.
-        margin.fast_min(mask.bitselect(delta, -delta))
+        let m = margin.fast_min(l.loaded.bitselect(l.delta, -l.delta));
+        if !approach {
+            return m;
+        }
+        let v = l.pushing.bitselect(l.v_r, -l.v_r) * f64x4::splat(APPROACH_MARGIN_TIME);
+        m.fast_min(l.loaded.bitselect(v, f64x4::splat(f64::INFINITY)))
     }
 }
 
@@ -164,22 +207,28 @@ pub struct TwoSided(
 );
 
 impl DampingLaw for Undamped {
+    const SWITCHES_ON_APPROACH: bool = false;
+
     #[inline(always)]
-    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4) -> f64x4 {
+    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4, _pushing: f64x4) -> f64x4 {
         elastic
     }
 }
 
 impl DampingLaw for CompressionOnly {
+    const SWITCHES_ON_APPROACH: bool = true;
+
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4 {
-        elastic + ((f64x4::splat(self.0) * v_r.fast_max(f64x4::ZERO)) & loaded)
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, pushing: f64x4) -> f64x4 {
+        elastic + ((f64x4::splat(self.0) * v_r) & (loaded & pushing))
     }
 }
 
 impl DampingLaw for TwoSided {
+    const SWITCHES_ON_APPROACH: bool = false;
+
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4) -> f64x4 {
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, _pushing: f64x4) -> f64x4 {
         (elastic + f64x4::splat(self.0) * v_r).fast_max(f64x4::ZERO) & loaded
     }
 }
@@ -344,7 +393,13 @@ impl BallSet {
             None => (0.0, 1.0),
         };
         let sum = match regime {
-            Some(r) => self.sum(s, Held(&r.loaded)),
+            Some(r) => self.sum(
+                s,
+                Held {
+                    loaded: &r.loaded,
+                    pushing: &r.pushing,
+                },
+            ),
             None => self.sum(s, Natural),
         };
         (sum, trig)
@@ -354,6 +409,7 @@ impl BallSet {
     pub fn no_regime(&self) -> Regime {
         Regime {
             loaded: vec![f64x4::ZERO; self.dir_cos.len()],
+            pushing: vec![f64x4::ZERO; self.dir_cos.len()],
         }
     }
 
@@ -364,15 +420,17 @@ impl BallSet {
         let (sc, cc) = (self.sines[0], self.cosines[0]);
         let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
         let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
-        for (((m, dc), ds), off) in regime
-            .loaded
-            .iter_mut()
-            .zip(&self.dir_cos)
+        let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
+        for (i, ((dc, ds), off)) in self
+            .dir_cos
+            .iter()
             .zip(&self.dir_sin)
             .zip(offset)
+            .enumerate()
         {
-            let delta = ex * (cc * *dc - sc * *ds) + ey * (sc * *dc + cc * *ds) + *off;
-            *m = Natural.load(0, delta).0;
+            let (nx, ny) = (cc * *dc - sc * *ds, sc * *dc + cc * *ds);
+            regime.loaded[i] = Natural.load(i, ex * nx + ey * ny + *off).0;
+            regime.pushing[i] = Natural.pushing(i, vx * nx + vy * ny);
         }
     }
 
@@ -549,9 +607,17 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
         let ny = sc * *dc + cc * *ds;
         let delta = ex * nx + ey * ny + *off;
         let (mask, d) = rule.load(i, delta);
-        margin = rule.margin(margin, mask, delta);
+        let v_r = vx * nx + vy * ny;
+        let pushing = rule.pushing(i, v_r);
+        let lane = LaneState {
+            delta,
+            v_r,
+            loaded: mask,
+            pushing,
+        };
+        margin = rule.margin(margin, lane, D::SWITCHES_ON_APPROACH);
         let elastic = k * d * d.abs().sqrt();
-        let f = law.force(elastic, vx * nx + vy * ny, mask);
+        let f = law.force(elastic, v_r, mask, pushing);
         fx += f * nx;
         fy += f * ny;
         loaded += f64x4::ONE & mask;
