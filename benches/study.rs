@@ -101,7 +101,7 @@ fn write_grid(dir: &Path, name: &str, cases: usize, duration: f64, p: &Params) -
          duration: {duration}\n\
          sample_rate: {}\n\
          bearing: {{clearance: \"40 um\", stiffness: 9.57e9, waviness: {{number: 35}}}}\n\
-         solver: {{method: dopri5, rtol: 1e-8, atol: 1e-12}}\n\
+         solver: {{method: dop853, rtol: 1e-8, atol: 1e-12}}\n\
          output: {{dtype: {}, compression: {}}}\n\
          max_cases: 1000000\n\
          grid:\n  location: [crank_ground, crank_rod]\n  rpm: [300, 600]\n  \

@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         duration: 0.4,
         sample_rate: 50_000.0,
     };
-    let solver = SolverSettings::new(Method::DormandPrince {
+    let solver = SolverSettings::new(Method::Dop853 {
         rtol: 1e-8,
         atol: 1e-12,
     });
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // window keeps one frequency grid): from one revolution at the slowest speed.
     let t_from = default_window_start(300.0);
     println!(
-        "Paper study: DOPRI5 rtol 1e-8, {} s at {} Hz; metrics over t >= {t_from} s",
+        "Paper study: DOP853 rtol 1e-8, {} s at {} Hz; metrics over t >= {t_from} s",
         sampling.duration, sampling.sample_rate
     );
 

@@ -161,7 +161,7 @@ pub struct GeometrySection {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct SolverSection {
-    /// `dopri5` (default), `tsit5`, `dop853` (the adaptive explicit pairs, with
+    /// `dop853` (default), `dopri5`, `tsit5` (the adaptive explicit pairs, with
     /// `rtol`, `atol`), `rk4` (with `step`) or `sdirk4` (with `rtol`, `atol`).
     pub method: Option<S<String>>,
     pub rtol: Option<S<Scalar>>,

@@ -777,7 +777,7 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
     let s = match &file.solver {
         Some(s) => s,
         None => {
-            return Ok(SolverSettings::new(Method::DormandPrince {
+            return Ok(SolverSettings::new(Method::Dop853 {
                 rtol: 1e-8,
                 atol: 1e-12,
             }))
@@ -807,9 +807,9 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
     let rtol = positive(&s.rtol, Dimension::Dimensionless, "solver.rtol", 1e-8)?;
     let atol = positive(&s.atol, Dimension::Dimensionless, "solver.atol", 1e-12)?;
     let method = match s.method.as_ref().map(|m| m.value.as_str()) {
-        None | Some("dopri5") => Method::DormandPrince { rtol, atol },
+        Some("dopri5") => Method::DormandPrince { rtol, atol },
         Some("tsit5") => Method::Tsit5 { rtol, atol },
-        Some("dop853") => Method::Dop853 { rtol, atol },
+        None | Some("dop853") => Method::Dop853 { rtol, atol },
         Some("sdirk4") => Method::Sdirk4 { rtol, atol },
         Some("rk4") => Method::Rk4 {
             step: positive(&s.step, Dimension::Time, "solver.step", 20e-6)?,
@@ -824,7 +824,7 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
         }
     };
     // A setting the chosen method would ignore is refused, not dropped silently.
-    let method_name = s.method.as_ref().map_or("dopri5", |m| m.value.as_str());
+    let method_name = s.method.as_ref().map_or("dop853", |m| m.value.as_str());
     let given =
         |v: &Option<S<Scalar>>| v.as_ref().map(|v| (at(&v.referenced), v.value.to_string()));
     let events = s
