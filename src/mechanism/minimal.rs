@@ -230,7 +230,8 @@ impl MinimalSliderCrank {
             // The journal turns with the rod, whose angle needs the crank's first.
             _ => {
                 let kin = k.kinematics(crank.sin_cos(), e, ed)?;
-                let state = w.weights.contact_state(e, ed, kin.s.atan2(kin.c), crank);
+                let (journal, housing) = race_turns(self.location, crank, &kin);
+                let state = w.weights.contact_state(e, ed, journal, housing);
                 (kin, w.balls.evaluate(&state, regime, None).0)
             }
         };
@@ -327,10 +328,7 @@ impl OdeSystem for MinimalSliderCrank {
         let crank = k.omega * t;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
         let kin = k.kinematics(crank.sin_cos(), e, ed)?;
-        let (journal_turn, housing_turn) = match self.location {
-            Location::CrankRod => (kin.s.atan2(kin.c), crank),
-            _ => (crank, 0.0),
-        };
+        let (journal_turn, housing_turn) = race_turns(self.location, crank, &kin);
         let Some(w) = self.bearing.as_mut() else {
             return Ok(false);
         };
@@ -348,5 +346,16 @@ impl OdeSystem for MinimalSliderCrank {
 
     fn margin(&self) -> f64 {
         self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
+    }
+}
+
+/// The journal's and the housing's rotations since `t = 0` (rad) at crank angle
+/// `crank` (rad): at crank_rod the journal turns with the rod (its angle from `kin`)
+/// and the housing with the crank; elsewhere the journal turns with the crank and the
+/// housing (ground) stands still.
+fn race_turns(location: Location, crank: f64, kin: &Kinematics) -> (f64, f64) {
+    match location {
+        Location::CrankRod => (kin.s.atan2(kin.c), crank),
+        _ => (crank, 0.0),
     }
 }
