@@ -33,6 +33,8 @@ use super::{CaseParams, Location, Sample, GRAVITY};
 struct Constants {
     l2: f64,
     l3: f64,
+    /// `1/L3` (1/m).
+    inv_l3: f64,
     m2: f64,
     m3: f64,
     j3: f64,
@@ -55,7 +57,7 @@ impl Constants {
     ) -> Result<Kinematics, ModelError> {
         let k = self;
         let w2 = k.omega * k.omega;
-        let s = -(e[1] + k.l2 * uy) / k.l3;
+        let s = -(e[1] + k.l2 * uy) * k.inv_l3;
         let c2 = 1.0 - s * s;
         if c2.is_nan() {
             return Err(ModelError::NonFinite {
@@ -66,7 +68,9 @@ impl Constants {
             return Err(ModelError::SingularConstraints);
         }
         let c = c2.sqrt();
-        let k_theta = -1.0 / (k.l3 * c);
+        // One division for both `1/(L3 c)` and `s/c`.
+        let inv_c = 1.0 / c;
+        let k_theta = -k.inv_l3 * inv_c;
         // θ̇3 = ∂θ3/∂A_y Ȧ_y; θ̈3 = k_θ (Ä_y − L3 s θ̇3²) with Ä = ë − L2 ω² u.
         let theta_d = k_theta * (ed[1] + k.l2 * k.omega * ux);
         let whirl = k.l3 * theta_d * theta_d;
@@ -78,7 +82,7 @@ impl Constants {
             u: [ux, uy],
             s,
             c,
-            tan: s / c,
+            tan: s * inv_c,
             k_theta,
             theta_dd0,
             rod_dd0: [big_end_x + 0.5 * along, -0.5 * k.l2 * w2 * uy],
@@ -106,8 +110,11 @@ impl Constants {
             - k.j3 * kin.k_theta * kin.theta_dd0
             - k.m3 * (0.5 * t * kin.rod_dd0[0] + 0.5 * kin.rod_dd0[1])
             - k.m4 * t * kin.slider_dd0;
-        let det = m11 * m22 - m12 * m12;
-        [(m22 * bx - m12 * by) / det, (m11 * by - m12 * bx) / det]
+        let inv_det = 1.0 / (m11 * m22 - m12 * m12);
+        [
+            (m22 * bx - m12 * by) * inv_det,
+            (m11 * by - m12 * bx) * inv_det,
+        ]
     }
 }
 
@@ -173,6 +180,7 @@ impl MinimalSliderCrank {
             k: Constants {
                 l2: mp.crank_length,
                 l3: mp.rod_length,
+                inv_l3: 1.0 / mp.rod_length,
                 m2: mp.crank_mass,
                 m3: mp.rod_mass,
                 j3: mp.rod_inertia,

@@ -395,14 +395,18 @@ where
 /// any step's error, e.g. `1e-14 s` on a `100 µs` step.
 const EVENT_RESOLUTION: f64 = 1e-10;
 
+/// Closest (fraction of the step) a trial point of [`locate`] comes to an end of
+/// its bracket: half of [`EVENT_RESOLUTION`].
+const NUDGE: f64 = 0.5 * EVENT_RESOLUTION;
+
 /// Locates the first regime switch of an accepted step on its continuous extension
 /// `ends` + `cont`, given the switching margin at its start (`≥ 0`) and each
 /// stage's node and margin in `stages`: the switching margin `g(θ)` of the held
 /// regime is evaluated along the extension, at the earliest stage node where it is
 /// negative (the step's end included), to bracket a sign change, which the
-/// Illinois variant of regula falsi then narrows to [`EVENT_RESOLUTION`]
-/// (bisecting when the secant point falls on an end, stopping when no time between
-/// the ends is left). Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the state there in `y_event`,
+/// Illinois variant of regula falsi then narrows to [`EVENT_RESOLUTION`] (keeping
+/// trial points [`NUDGE`] inside the bracket, bisecting when the secant point is
+/// not strictly inside it, stopping when no time between the ends is left). Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the state there in `y_event`,
 /// or `None` when the extension does not cross (a stage state strayed, the
 /// trajectory did not). `f_end` is scratch for the slopes; each `g` costs one
 /// evaluation of `f`.
@@ -439,8 +443,17 @@ fn locate<S: OdeSystem>(
     while b - a > EVENT_RESOLUTION {
         let resolved = |m: f64| m > a && m < b && time(m) != time(a) && time(m) != time(b);
         let mut m = (a * gb - b * ga) / (gb - ga);
+        if !(m > a && m < b) {
+            m = 0.5 * (a + b);
+        }
+        // A secant point within the resolution of an end is moved to half the
+        // resolution from it. Once an end sits on the switch, the secant points
+        // crowd it and the other end would only creep in by Illinois halvings (up
+        // to ~30 evaluations); this way the next point either closes the bracket
+        // or moves the far end.
+        m = m.clamp(a + NUDGE, b - NUDGE);
         if !resolved(m) {
-            // The secant point is not strictly inside in time: bisect instead.
+            // The point is not strictly inside in time: bisect instead.
             m = 0.5 * (a + b);
             if !resolved(m) {
                 break;
@@ -536,4 +549,83 @@ where
         std::mem::swap(&mut w.y, &mut w.y_new);
     }
     Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A system whose switching margin is `SWITCH − y` (m); [`locate`] takes the
+    /// state from the continuous extension and only the margin from the system.
+    struct Ramp {
+        margin: f64,
+    }
+
+    const SWITCH: f64 = 0.3;
+
+    impl OdeSystem for Ramp {
+        fn dim(&self) -> usize {
+            1
+        }
+
+        fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+            self.margin = SWITCH - y[0];
+            dydt[0] = 0.0;
+            Ok(())
+        }
+
+        fn margin(&self) -> f64 {
+            self.margin
+        }
+    }
+
+    /// Once an end of the bracket sits on the switch (here the first, from a stage
+    /// node), the bracket must close at once instead of the far end creeping in by
+    /// bisection (33 evaluations here without [`NUDGE`]).
+    #[test]
+    fn a_switch_is_located_in_few_evaluations() {
+        // The cubic Hermite extension is exact for `y = θ + θ²`. Late in a run
+        // (`t0` = 1000 s) time resolves only ~1e-13 of the step: the secant points
+        // next to an end on the switch are not distinct times.
+        let ends = StepEnds {
+            t0: 1000.0,
+            h: 1.0,
+            y0: &[0.0],
+            y1: &[2.0],
+            f0: &[1.0],
+            f1: &[3.0],
+        };
+        let mut sys = Ramp { margin: 0.0 };
+        let mut stats = Stats::default();
+        let (mut y_event, mut f_end) = ([0.0], [0.0]);
+        let switch = ((1.0 + 4.0 * SWITCH).sqrt() - 1.0) / 2.0;
+        // A stage node on the switch (the first float past it on the extension)
+        // brackets it at once, from far below.
+        let mut node = switch;
+        let mut y = [0.0];
+        loop {
+            ends.continuous(node, &[], &mut y);
+            if SWITCH - y[0] < 0.0 {
+                break;
+            }
+            node = f64::from_bits(node.to_bits() + 1);
+        }
+        let stages = [(node, SWITCH - y[0]), (1.0, SWITCH - 2.0)];
+        let theta = locate(
+            &mut sys,
+            &ends,
+            &[],
+            (SWITCH, stages.into_iter()),
+            (&mut y_event, &mut f_end),
+            &mut stats,
+        )
+        .unwrap()
+        .unwrap();
+        assert!(
+            (theta - switch).abs() <= EVENT_RESOLUTION,
+            "θ = {theta}, switch at {switch}"
+        );
+        assert!(SWITCH - y_event[0] < 0.0, "the state is past the switch");
+        assert!(stats.rhs_evals <= 3, "{} evaluations", stats.rhs_evals);
+    }
 }
