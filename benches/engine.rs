@@ -128,10 +128,7 @@ fn kernel(c: &mut Criterion) {
 
 /// The state of `sys` after 50 ms of the case (a loaded bearing).
 fn state_at_50ms<S: OdeSystem>(sys: &mut S, y0: &[f64]) -> Vec<f64> {
-    let settings = SolverSettings::new(Method::DormandPrince {
-        rtol: 1e-8,
-        atol: 1e-12,
-    });
+    let settings = SolverSettings::new(Method::DEFAULT);
     let mut y_end = y0.to_vec();
     integrate(sys, &settings, 0.0, y0, &[0.05], |_, _, y| {
         y_end.copy_from_slice(y);
@@ -191,10 +188,7 @@ fn whole_case(c: &mut Criterion) {
         duration: 0.4,
         sample_rate: 50_000.0,
     };
-    let settings = SolverSettings::new(Method::DormandPrince {
-        rtol: 1e-8,
-        atol: 1e-12,
-    });
+    let settings = SolverSettings::new(Method::DEFAULT);
     let mut group = c.benchmark_group("case");
     group.sample_size(10);
     let paper = paper_case(Location::CrankGround);

@@ -37,10 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         duration: 0.4,
         sample_rate: 50_000.0,
     };
-    let solver = SolverSettings::new(Method::Dop853 {
-        rtol: 1e-8,
-        atol: 1e-12,
-    });
+    let solver = SolverSettings::new(Method::DEFAULT);
     // One window for every case, as `studyrun studies/paper.yaml` uses (a common
     // window keeps one frequency grid): from one revolution at the slowest speed.
     let t_from = default_window_start(300.0);

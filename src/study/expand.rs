@@ -12,7 +12,7 @@ use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site};
 use crate::simulate::{Sampling, CHANNELS};
-use crate::solve::{Method, SolverSettings};
+use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL};
 
 /// Which effects a study simulates; anything off is not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -776,12 +776,7 @@ fn harris(
 fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> {
     let s = match &file.solver {
         Some(s) => s,
-        None => {
-            return Ok(SolverSettings::new(Method::Dop853 {
-                rtol: 1e-8,
-                atol: 1e-12,
-            }))
-        }
+        None => return Ok(SolverSettings::new(Method::DEFAULT)),
     };
     let positive = |v: &Option<S<Scalar>>,
                     dim: Dimension,
@@ -804,8 +799,18 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
             }
         }
     };
-    let rtol = positive(&s.rtol, Dimension::Dimensionless, "solver.rtol", 1e-8)?;
-    let atol = positive(&s.atol, Dimension::Dimensionless, "solver.atol", 1e-12)?;
+    let rtol = positive(
+        &s.rtol,
+        Dimension::Dimensionless,
+        "solver.rtol",
+        DEFAULT_RTOL,
+    )?;
+    let atol = positive(
+        &s.atol,
+        Dimension::Dimensionless,
+        "solver.atol",
+        DEFAULT_ATOL,
+    )?;
     let method = match s.method.as_ref().map(|m| m.value.as_str()) {
         Some("dopri5") => Method::DormandPrince { rtol, atol },
         Some("tsit5") => Method::Tsit5 { rtol, atol },
