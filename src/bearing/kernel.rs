@@ -17,10 +17,12 @@
 //!   [`TwoSided`]): the law is chosen once per evaluation outside the ball loop, and
 //!   a case without damping or waviness runs code that has none.
 //!
-//! - A [`Regime`] (which balls are loaded) can be held fixed: [`BallSet::force_in`]
-//!   applies the contact law of the regime's balls whatever the sign of `δ`
-//!   (continued as `K δ |δ|^{1/2}`), so the force is smooth in the state while the
-//!   regime holds. Every evaluation reports its [`BallSum::margin`], the smallest
+//! - A [`Regime`] (which balls are loaded, and on which of them the damping law is
+//!   on its acting branch) can be held fixed: [`BallSet::force_in`] applies the
+//!   contact law of the regime's balls whatever the sign of `δ` (continued as
+//!   `K δ |δ|^{1/2}`) and each ball's branch of the damping law (`C v_r` or 0 for
+//!   compression-only damping, `K δ^{3/2} + C v_r` or 0 for two-sided damping), so
+//!   the force is smooth in the state while the regime holds. Every evaluation reports its [`BallSum::margin`], the smallest
 //!   signed distance (m) of a ball from switching; a negative margin says the regime
 //!   no longer matches the state. The event-locating integrators use both.
 //!
@@ -60,8 +62,9 @@ pub struct BallSum {
     /// Number of loaded balls: those with `δ_r > 0`, or the regime's.
     pub loaded: usize,
     /// Switching margin (m) under a held [`Regime`]: the smallest `δ_r` of a loaded
-    /// ball and `−δ_r` of an unloaded one; it turns negative once a ball's `δ_r` has
-    /// changed sign. `+∞` under the natural law, which never has to switch.
+    /// ball, `−δ_r` of an unloaded one and, with damping, `±`
+    /// [`DampingLaw::switch_distance`] of a loaded one; it turns negative once a
+    /// ball has switched. `+∞` under the natural law, which never has to switch.
     pub margin: f64,
 }
 
@@ -71,8 +74,10 @@ pub struct BallSum {
 pub struct Regime {
     /// All bits set in the lanes of loaded balls, [`LANES`] balls per vector.
     loaded: Vec<f64x4>,
-    /// All bits set in the lanes where the compression-only damping acts (`v_r > 0`).
-    pushing: Vec<f64x4>,
+    /// All bits set in the lanes where the damping law is on its acting branch
+    /// ([`DampingLaw::acting`]: `v_r > 0` for compression-only damping, a positive
+    /// total force for two-sided damping).
+    acting: Vec<f64x4>,
 }
 
 /// One ball, evaluated on its own by [`BallSet::ball`].
@@ -97,18 +102,27 @@ pub struct Ball {
 /// A damping law of loaded balls: the ball forces of [`LANES`] balls from their
 /// elastic parts, approach speeds and load mask, without branching.
 pub trait DampingLaw: Copy {
-    /// Whether the law switches where a loaded ball's approach speed `v_r` changes
-    /// sign (the compression-only law's `max(v_r, 0)`), a switch an event-locating
-    /// integrator should find like a contact onset.
-    const SWITCHES_ON_APPROACH: bool;
-    /// Ball forces (N) from `elastic = K δ₊^{3/2}` (N), approach speeds `v_r` (m/s),
-    /// `loaded` (all bits set where the ball is loaded, else 0) and `pushing` (all
-    /// bits set where the damping acts: `v_r > 0`, or as a held regime says).
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, pushing: f64x4) -> f64x4;
+    /// Whether the law has a switch of its own on loaded balls (compression-only:
+    /// where `v_r` changes sign; two-sided: where `K δ^{3/2} + C v_r` reaches 0),
+    /// which an event-locating integrator should find like a contact onset.
+    const SWITCHES: bool;
+    /// All bits set where the law is on its acting branch, from `elastic`
+    /// (`K δ^{3/2}`, N) and the approach speeds `v_r` (m/s).
+    fn acting(self, elastic: f64x4, v_r: f64x4) -> f64x4;
+    /// Signed distance (m) from the law's own switch, positive on the acting
+    /// branch: the switching quantity scaled to metres by
+    /// [`APPROACH_MARGIN_TIME`] (only its sign decides; the scale keeps it
+    /// comparable with `δ` in [`BallSum::margin`]).
+    fn switch_distance(self, elastic: f64x4, v_r: f64x4) -> f64x4;
+    /// Ball forces (N) from `elastic = K δ |δ|^{1/2}` (N), approach speeds `v_r`
+    /// (m/s), `loaded` (all bits set where the ball is loaded, else 0) and `acting`
+    /// (all bits set where the law is on its acting branch, naturally or as a held
+    /// regime says).
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4;
 }
 
-/// Weight (s) of an approach-speed switch in [`BallSum::margin`]: `v_r` (m/s) counts
-/// as the distance it covers in this time. Only the sign matters for finding the
+/// Weight (s) of a damping switch in [`BallSum::margin`]: `v_r` (m/s) counts as the
+/// distance it covers in this time (a force as the distance `C v_r` would give). Only the sign matters for finding the
 /// switch; the weight keeps the margin's values in metres of a plausible size.
 pub const APPROACH_MARGIN_TIME: f64 = 1e-4;
 
@@ -119,33 +133,35 @@ trait LoadRule: Copy {
     /// the elastic force `K d |d|^{1/2}` takes: `δ` on loaded lanes, 0 elsewhere
     /// (so that unloaded lanes take the square root of 0).
     fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4);
-    /// Where the compression-only damping acts, given the approach speeds `v_r`.
-    fn pushing(self, i: usize, v_r: f64x4) -> f64x4;
+    /// Where the damping law is on its acting branch, given where it is naturally
+    /// (`natural`, from [`DampingLaw::acting`]).
+    fn acting(self, i: usize, natural: f64x4) -> f64x4;
     /// `margin` lowered by the lanes' signed distances from switching: `δ` where
-    /// loaded, `−δ` where not, and with `approach` also `±v_r` ×
-    /// [`APPROACH_MARGIN_TIME`] on loaded lanes (`+` where pushing). The natural
-    /// law cannot switch and leaves it alone.
-    fn margin(self, margin: f64x4, lane: LaneState, approach: bool) -> f64x4;
+    /// loaded, `−δ` where not, and with `law_switches` also the damping law's
+    /// [`DampingLaw::switch_distance`] on loaded lanes (`+` where acting). The
+    /// natural law cannot switch and leaves it alone.
+    fn margin(self, margin: f64x4, lane: LaneState, law_switches: bool) -> f64x4;
 }
 
 /// One lane vector's contact quantities, for [`LoadRule::margin`].
 #[derive(Clone, Copy)]
 struct LaneState {
     delta: f64x4,
-    v_r: f64x4,
+    /// [`DampingLaw::switch_distance`] (m).
+    distance: f64x4,
     loaded: f64x4,
-    pushing: f64x4,
+    acting: f64x4,
 }
 
 /// Loaded where `δ > 0`.
 #[derive(Clone, Copy)]
 struct Natural;
 
-/// Loaded and pushing as a held regime says.
+/// Loaded and acting as a held regime says.
 #[derive(Clone, Copy)]
 struct Held<'a> {
     loaded: &'a [f64x4],
-    pushing: &'a [f64x4],
+    acting: &'a [f64x4],
 }
 
 impl LoadRule for Natural {
@@ -155,12 +171,12 @@ impl LoadRule for Natural {
     }
 
     #[inline(always)]
-    fn pushing(self, _i: usize, v_r: f64x4) -> f64x4 {
-        v_r.simd_gt(f64x4::ZERO)
+    fn acting(self, _i: usize, natural: f64x4) -> f64x4 {
+        natural
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, _lane: LaneState, _approach: bool) -> f64x4 {
+    fn margin(self, margin: f64x4, _lane: LaneState, _law_switches: bool) -> f64x4 {
         margin
     }
 }
@@ -172,19 +188,19 @@ impl LoadRule for Held<'_> {
     }
 
     #[inline(always)]
-    fn pushing(self, i: usize, _v_r: f64x4) -> f64x4 {
-        self.pushing[i]
+    fn acting(self, i: usize, _natural: f64x4) -> f64x4 {
+        self.acting[i]
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, l: LaneState, approach: bool) -> f64x4 {
+    fn margin(self, margin: f64x4, l: LaneState, law_switches: bool) -> f64x4 {
         // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone.
         let m = margin.fast_min(l.loaded.bitselect(l.delta, -l.delta));
-        if !approach {
+        if !law_switches {
             return m;
         }
-        let v = l.pushing.bitselect(l.v_r, -l.v_r) * f64x4::splat(APPROACH_MARGIN_TIME);
-        m.fast_min(l.loaded.bitselect(v, f64x4::splat(f64::INFINITY)))
+        let d = l.acting.bitselect(l.distance, -l.distance);
+        m.fast_min(l.loaded.bitselect(d, f64x4::splat(f64::INFINITY)))
     }
 }
 
@@ -207,29 +223,64 @@ pub struct TwoSided(
 );
 
 impl DampingLaw for Undamped {
-    const SWITCHES_ON_APPROACH: bool = false;
+    const SWITCHES: bool = false;
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4, _pushing: f64x4) -> f64x4 {
+    fn acting(self, _elastic: f64x4, _v_r: f64x4) -> f64x4 {
+        f64x4::ZERO
+    }
+
+    #[inline(always)]
+    fn switch_distance(self, _elastic: f64x4, _v_r: f64x4) -> f64x4 {
+        f64x4::splat(f64::INFINITY)
+    }
+
+    #[inline(always)]
+    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4, _acting: f64x4) -> f64x4 {
         elastic
     }
 }
 
+/// Acting where `v_r > 0`; the switch distance is `v_r` × [`APPROACH_MARGIN_TIME`].
 impl DampingLaw for CompressionOnly {
-    const SWITCHES_ON_APPROACH: bool = true;
+    const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, pushing: f64x4) -> f64x4 {
-        elastic + ((f64x4::splat(self.0) * v_r) & (loaded & pushing))
+    fn acting(self, _elastic: f64x4, v_r: f64x4) -> f64x4 {
+        v_r.simd_gt(f64x4::ZERO)
+    }
+
+    #[inline(always)]
+    fn switch_distance(self, _elastic: f64x4, v_r: f64x4) -> f64x4 {
+        v_r * f64x4::splat(APPROACH_MARGIN_TIME)
+    }
+
+    #[inline(always)]
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4 {
+        elastic + ((f64x4::splat(self.0) * v_r) & (loaded & acting))
     }
 }
 
+/// Acting where `K δ^{3/2} + C v_r > 0` (the ball pushes); the switch distance is
+/// that force × [`APPROACH_MARGIN_TIME`] / `C`, i.e. `v_r` × the time plus the
+/// elastic part as an equivalent speed.
 impl DampingLaw for TwoSided {
-    const SWITCHES_ON_APPROACH: bool = false;
+    const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, _pushing: f64x4) -> f64x4 {
-        (elastic + f64x4::splat(self.0) * v_r).fast_max(f64x4::ZERO) & loaded
+    fn acting(self, elastic: f64x4, v_r: f64x4) -> f64x4 {
+        (elastic + f64x4::splat(self.0) * v_r).simd_gt(f64x4::ZERO)
+    }
+
+    #[inline(always)]
+    fn switch_distance(self, elastic: f64x4, v_r: f64x4) -> f64x4 {
+        let total = elastic + f64x4::splat(self.0) * v_r;
+        total * f64x4::splat(APPROACH_MARGIN_TIME / self.0)
+    }
+
+    #[inline(always)]
+    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4 {
+        (elastic + f64x4::splat(self.0) * v_r) & (loaded & acting)
     }
 }
 
@@ -397,7 +448,7 @@ impl BallSet {
                 s,
                 Held {
                     loaded: &r.loaded,
-                    pushing: &r.pushing,
+                    acting: &r.acting,
                 },
             ),
             None => self.sum(s, Natural),
@@ -409,7 +460,7 @@ impl BallSet {
     pub fn no_regime(&self) -> Regime {
         Regime {
             loaded: vec![f64x4::ZERO; self.dir_cos.len()],
-            pushing: vec![f64x4::ZERO; self.dir_cos.len()],
+            acting: vec![f64x4::ZERO; self.dir_cos.len()],
         }
     }
 
@@ -421,6 +472,8 @@ impl BallSet {
         let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
         let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
         let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
+        let k = f64x4::splat(self.stiffness);
+        let law = self.law;
         for (i, ((dc, ds), off)) in self
             .dir_cos
             .iter()
@@ -429,8 +482,14 @@ impl BallSet {
             .enumerate()
         {
             let (nx, ny) = (cc * *dc - sc * *ds, sc * *dc + cc * *ds);
-            regime.loaded[i] = Natural.load(i, ex * nx + ey * ny + *off).0;
-            regime.pushing[i] = Natural.pushing(i, vx * nx + vy * ny);
+            let (loaded, d) = Natural.load(i, ex * nx + ey * ny + *off);
+            let (elastic, v_r) = (k * d * d.sqrt(), vx * nx + vy * ny);
+            regime.loaded[i] = loaded;
+            regime.acting[i] = match law {
+                Law::Undamped => Undamped.acting(elastic, v_r),
+                Law::CompressionOnly(c) => CompressionOnly(c).acting(elastic, v_r),
+                Law::TwoSided(c) => TwoSided(c).acting(elastic, v_r),
+            };
         }
     }
 
@@ -608,16 +667,20 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
         let delta = ex * nx + ey * ny + *off;
         let (mask, d) = rule.load(i, delta);
         let v_r = vx * nx + vy * ny;
-        let pushing = rule.pushing(i, v_r);
+        let elastic = k * d * d.abs().sqrt();
+        let acting = rule.acting(i, law.acting(elastic, v_r));
         let lane = LaneState {
             delta,
-            v_r,
+            distance: if D::SWITCHES {
+                law.switch_distance(elastic, v_r)
+            } else {
+                f64x4::ZERO
+            },
             loaded: mask,
-            pushing,
+            acting,
         };
-        margin = rule.margin(margin, lane, D::SWITCHES_ON_APPROACH);
-        let elastic = k * d * d.abs().sqrt();
-        let f = law.force(elastic, v_r, mask, pushing);
+        margin = rule.margin(margin, lane, D::SWITCHES);
+        let f = law.force(elastic, v_r, mask, acting);
         fx += f * nx;
         fy += f * ny;
         loaded += f64x4::ONE & mask;
