@@ -22,9 +22,10 @@
 //!   contact law of the regime's balls whatever the sign of `δ` (continued as
 //!   `K δ |δ|^{1/2}`) and each ball's branch of the damping law (`C v_r` or 0 for
 //!   compression-only damping, `K δ^{3/2} + C v_r` or 0 for two-sided damping), so
-//!   the force is smooth in the state while the regime holds. Every evaluation reports its [`BallSum::margin`], the smallest
-//!   signed distance (m) of a ball from switching; a negative margin says the regime
-//!   no longer matches the state. The event-locating integrators use both.
+//!   the force is smooth in the state while the regime holds. Every evaluation
+//!   reports its [`BallSum::margin`], the smallest signed distance (m) of a ball from
+//!   switching; a negative margin says the regime no longer matches the state. The
+//!   event-locating integrators use both.
 //!
 //! [`BallSet::ball`] is the kernel's scalar twin: one ball at a time, with every
 //! waviness height from its own `sin`, as a reference for parity tests and for the
@@ -122,8 +123,9 @@ pub trait DampingLaw: Copy {
 }
 
 /// Weight (s) of a damping switch in [`BallSum::margin`]: `v_r` (m/s) counts as the
-/// distance it covers in this time (a force as the distance `C v_r` would give). Only the sign matters for finding the
-/// switch; the weight keeps the margin's values in metres of a plausible size.
+/// distance it covers in this time (a force as the distance `C v_r` would give).
+/// Only the sign matters for finding the switch; the weight keeps the margin's
+/// values in metres of a plausible size.
 pub const APPROACH_MARGIN_TIME: f64 = 1e-4;
 
 /// Whether the lanes' balls are loaded: by the sign of `δ` (the natural law), or as

@@ -234,9 +234,9 @@ fn prepare_dense<S: OdeSystem>(
 /// continuous extension ([`locate`]); the step is cut there (samples up to the
 /// switch come from its extension), the state at the switch is recomputed by a step
 /// of the pair's full order ending on it, and the run restarts from there in the new
-/// regime with a fresh first stage. Stepping across a
-/// switch instead (where the compression-only damping force jumps and the Hertz force
-/// loses smoothness) costs cascades of rejected steps and an error of order `h`.
+/// regime with a fresh first stage. Stepping across a switch instead (where the
+/// compression-only damping force jumps and the Hertz force loses smoothness) costs
+/// cascades of rejected steps and an error of order `h`.
 pub(crate) fn adaptive<S, O>(
     sys: &mut S,
     tab: &ExplicitTableau,
@@ -406,9 +406,10 @@ const NUDGE: f64 = 0.5 * EVENT_RESOLUTION;
 /// negative (the step's end included), to bracket a sign change, which the
 /// Illinois variant of regula falsi then narrows to [`EVENT_RESOLUTION`] (keeping
 /// trial points [`NUDGE`] inside the bracket, bisecting when the secant point is
-/// not strictly inside it, stopping when no time between the ends is left). Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the state there in `y_event`,
-/// or `None` when the extension does not cross (a stage state strayed, the
-/// trajectory did not). `f_end` is scratch for the slopes; each `g` costs one
+/// not strictly inside it, stopping when no time between the ends is left).
+/// Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the
+/// state there in `y_event`, or `None` when the extension does not cross (a stage
+/// state strayed, the trajectory did not). `f_end` is scratch for the slopes; each `g` costs one
 /// evaluation of `f`.
 fn locate<S: OdeSystem>(
     sys: &mut S,
