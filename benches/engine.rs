@@ -1,11 +1,13 @@
 //! Criterion benchmarks of the engine's hot paths:
 //!
-//! - `kernel/...`: the SoA ball-force kernel per ball count and scene, and its
+//! - `kernel/...`: the SoA ball-force kernel per ball count and scene on the lanes
+//!   this CPU runs (AVX where it has it), on the SSE2 baseline (`_sse2`), and its
 //!   scalar twin (one ball at a time) for the SIMD gain;
 //! - `rhs/...`: one right-hand side of the minimal-coordinate model per location and
-//!   per effect (what each effect costs), and of the general Cartesian core for the
-//!   gain of the specialisation;
-//! - `sample/...`: one output sample (all of MODEL.md §3);
+//!   per effect (what each effect costs), with all effects also on the SSE2
+//!   baseline (`all_sse2`), and of the general Cartesian core for the gain of the
+//!   specialisation;
+//! - `sample/...`: one output sample (all of MODEL.md §3), also on the baseline;
 //! - `case/...`: one whole paper case, and the ideal mechanism.
 //!
 //! Run: `cargo bench --bench engine`. Figures are kept in README.md ("Current figures").
@@ -15,6 +17,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use studyrun::bearing::{BallSet, BearingParams, CageWeights, DampingModel, RaceWaviness};
 use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, SliderCrank};
+use studyrun::simd::Isa;
 use studyrun::simulate::{simulate, Sampling};
 use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
@@ -106,6 +109,11 @@ fn kernel(c: &mut Criterion) {
                 b.iter(|| black_box(set.force(black_box(&state))))
             });
             if balls == 9 || balls == 64 {
+                group.bench_with_input(
+                    BenchmarkId::new(format!("{}_sse2", scene.name), balls),
+                    &balls,
+                    |b, _| b.iter(|| black_box(set.force_on(Isa::Baseline, black_box(&state)))),
+                );
                 let twin = |s: &BallSet| {
                     (0..balls).fold([0.0; 2], |f, r| {
                         let ball = s.ball(r, black_box(&state));
@@ -154,6 +162,15 @@ fn rhs(c: &mut Criterion) {
                     black_box(dydt[3])
                 })
             });
+            if scene.name == "all" {
+                mech.set_isa(Isa::Baseline);
+                group.bench_function(format!("minimal/{location}/all_sse2"), |b| {
+                    b.iter(|| {
+                        mech.rhs(0.05, black_box(&y), &mut dydt).unwrap();
+                        black_box(dydt[3])
+                    })
+                });
+            }
         }
         let mut mech = SliderCrank::new(&paper_case(location)).unwrap();
         let y0 = mech.initial_state();
@@ -176,6 +193,10 @@ fn sample(c: &mut Criterion) {
         let y0 = mech.initial_state();
         let y = state_at_50ms(&mut mech, &y0);
         c.bench_function(&format!("sample/{location}"), |b| {
+            b.iter(|| black_box(mech.sample(0.05, black_box(&y)).unwrap()))
+        });
+        mech.set_isa(Isa::Baseline);
+        c.bench_function(&format!("sample/{location}/sse2"), |b| {
             b.iter(|| black_box(mech.sample(0.05, black_box(&y)).unwrap()))
         });
     }

@@ -27,6 +27,7 @@ pub mod metrics;
 pub mod multibody;
 pub mod output;
 pub mod run;
+pub mod simd;
 pub mod simulate;
 pub mod solve;
 pub mod study;

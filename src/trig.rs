@@ -5,15 +5,15 @@
 //! quadrant from a round-to-nearest by the `1.5·2⁵²` trick) and evaluates fdlibm's
 //! minimax polynomials of `sin` and `cos` on `[−π/4, π/4]`, then picks and signs
 //! them by quadrant with masks. Only packed `f64` operations are used (no integer
-//! lanes, no fused multiply-add), so baseline SSE2 runs it two lanes at a time and
-//! the result does not depend on the machine. Accuracy: within 2 ulp of the true
+//! lanes, no fused multiply-add), generic over [`Lanes`], so SSE2 runs it two lanes
+//! at a time, AVX four, with the same bits. Accuracy: within 2 ulp of the true
 //! value for `|x| ≤` [`REDUCTION_LIMIT`]; beyond that it falls back to the scalar
 //! `f64::sin_cos` of the standard library.
 
 // The constants are quoted digit for digit as fdlibm prints them.
 #![allow(clippy::excessive_precision)]
 
-use wide::f64x4;
+use crate::simd::{F64x4, Lanes};
 
 /// Largest `|x|` (rad) the three-part reduction keeps exact: about `2¹⁹·π/2`, where
 /// the quadrant `q` has at most 19 bits and `q·PIO2_1`, `q·PIO2_2` are exact.
@@ -49,37 +49,38 @@ const C: [f64; 6] = [
 
 /// `Σ coef_i z^i` by Horner's rule.
 #[inline(always)]
-fn horner(z: f64x4, coef: &[f64; 6]) -> f64x4 {
+fn horner<V: Lanes>(z: V, coef: &[f64; 6]) -> V {
     coef.iter()
         .rev()
-        .fold(f64x4::ZERO, |acc, &c| acc * z + f64x4::splat(c))
+        .fold(V::zero(), |acc, &c| acc * z + V::splat(c))
 }
 
-/// `(sin x, cos x)` of four angles `x` (rad), lane by lane. NaN or infinite angles
-/// give NaN, as `f64::sin_cos` does.
-#[inline]
-pub fn sin_cos4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+/// `(sin x, cos x)` of four angles `x` (rad), lane by lane, on lanes `V` (every lane
+/// type gives the same bits). NaN or infinite angles give NaN, as `f64::sin_cos`
+/// does.
+#[inline(always)]
+pub fn sin_cos4<V: Lanes>(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
     if !x.iter().all(|v| v.abs() <= REDUCTION_LIMIT) {
         let pairs = x.map(f64::sin_cos);
         return (pairs.map(|p| p.0), pairs.map(|p| p.1));
     }
-    let xv = f64x4::from(x);
-    let rounder = f64x4::splat(ROUNDER);
-    let q = (xv * f64x4::splat(std::f64::consts::FRAC_2_PI) + rounder) - rounder;
-    let r = ((xv - q * f64x4::splat(PIO2_1)) - q * f64x4::splat(PIO2_2)) - q * f64x4::splat(PIO2_3);
+    let xv = V::load(&F64x4(x));
+    let rounder = V::splat(ROUNDER);
+    let q = (xv * V::splat(std::f64::consts::FRAC_2_PI) + rounder) - rounder;
+    let r = ((xv - q * V::splat(PIO2_1)) - q * V::splat(PIO2_2)) - q * V::splat(PIO2_3);
     let z = r * r;
     let sin_r = r + r * z * horner(z, &S);
-    let cos_r = (f64x4::ONE - f64x4::splat(0.5) * z) + z * z * horner(z, &C);
+    let cos_r = (V::splat(1.0) - V::splat(0.5) * z) + z * z * horner(z, &C);
     // The quadrant q mod 4 as m = q − 4·round(q/4) ∈ {−2, −1, 0, 1, 2}.
-    let quarter = (q * f64x4::splat(0.25) + rounder) - rounder;
-    let m = q - f64x4::splat(4.0) * quarter;
-    let (one, two) = (f64x4::ONE, f64x4::splat(2.0));
+    let quarter = (q * V::splat(0.25) + rounder) - rounder;
+    let m = q - V::splat(4.0) * quarter;
+    let (one, two) = (V::splat(1.0), V::splat(2.0));
     let odd = m.abs().simd_eq(one);
     let half_turn = m.abs().simd_eq(two);
     // Quadrants 0..3: sin = s, c, −s, −c; cos = c, −s, −c, s.
     let sin_neg = half_turn | m.simd_eq(-one);
     let cos_neg = half_turn | m.simd_eq(one);
-    let sign = f64x4::splat(-0.0);
+    let sign = V::splat(-0.0);
     let sin = odd.bitselect(cos_r, sin_r) ^ (sign & sin_neg);
     let cos = odd.bitselect(sin_r, cos_r) ^ (sign & cos_neg);
     (sin.to_array(), cos.to_array())
@@ -88,6 +89,24 @@ pub fn sin_cos4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd::{dispatch, Isa, LaneTask};
+
+    /// `sin_cos4` on the lanes the CPU runs, checked bit for bit against the
+    /// baseline and the portable lanes.
+    fn sin_cos4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+        struct Task([f64; 4]);
+        impl LaneTask for Task {
+            type Output = ([f64; 4], [f64; 4]);
+            fn run<V: Lanes>(self) -> Self::Output {
+                super::sin_cos4::<V>(self.0)
+            }
+        }
+        let bits = |(s, c): ([f64; 4], [f64; 4])| (s.map(f64::to_bits), c.map(f64::to_bits));
+        let got = dispatch(Isa::detect(), Task(x));
+        assert_eq!(bits(got), bits(dispatch(Isa::Baseline, Task(x))), "{x:?}");
+        assert_eq!(bits(got), bits(super::sin_cos4::<F64x4>(x)), "{x:?}");
+        got
+    }
 
     /// Difference in units of the larger magnitude's `ε`.
     fn ulps(a: f64, b: f64) -> f64 {

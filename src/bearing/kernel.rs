@@ -9,10 +9,11 @@
 //!   height is a precomputed rotation of it) come from one [`LANES`]-wide `sin_cos`
 //!   per four angles: one call per evaluation for up to three harmonics.
 //! - Branch-free over the balls: contact is a mask (`δ > 0`), never an `if`. The
-//!   loop runs over [`LANES`]-wide vectors of the `wide` crate (portable SIMD on
-//!   stable Rust: packed SSE2 on baseline x86-64, AVX when a build enables it; the
-//!   same IEEE operations in the same order either way, no fused multiply-add), so
-//!   results do not depend on the machine that built the binary.
+//!   loop runs over [`LANES`]-wide vectors generic over [`Lanes`]: two SSE2
+//!   registers in baseline x86-64 code, one AVX register where the caller
+//!   dispatched to AVX at run time ([`crate::simd::dispatch`]). Both do the same
+//!   IEEE operations in the same order, without fused multiply-add, so results
+//!   depend neither on the machine that built the binary nor on the one running it.
 //! - The damping law is a type parameter ([`Undamped`], [`CompressionOnly`],
 //!   [`TwoSided`]): the law is chosen once per evaluation outside the ball loop, and
 //!   a case without damping or waviness runs code that has none.
@@ -31,8 +32,7 @@
 //! waviness height from its own `sin`, as a reference for parity tests and for the
 //! energy terms.
 
-use wide::f64x4;
-
+use crate::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
 use crate::trig::sin_cos4;
 
 use super::{BearingParams, DampingModel, RaceWaviness};
@@ -74,11 +74,11 @@ pub struct BallSum {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Regime {
     /// All bits set in the lanes of loaded balls, [`LANES`] balls per vector.
-    loaded: Vec<f64x4>,
+    loaded: Vec<F64x4>,
     /// All bits set in the lanes where the damping law is on its acting branch
     /// ([`DampingLaw::acting`]: `v_r > 0` for compression-only damping, a positive
     /// total force for two-sided damping).
-    acting: Vec<f64x4>,
+    acting: Vec<F64x4>,
 }
 
 /// One ball, evaluated on its own by [`BallSet::ball`].
@@ -109,17 +109,17 @@ pub trait DampingLaw: Copy {
     const SWITCHES: bool;
     /// All bits set where the law is on its acting branch, from `elastic`
     /// (`K δ^{3/2}`, N) and the approach speeds `v_r` (m/s).
-    fn acting(self, elastic: f64x4, v_r: f64x4) -> f64x4;
+    fn acting<V: Lanes>(self, elastic: V, v_r: V) -> V;
     /// Signed distance (m) from the law's own switch, positive on the acting
     /// branch: the switching quantity scaled to metres by
     /// [`APPROACH_MARGIN_TIME`] (only its sign decides; the scale keeps it
     /// comparable with `δ` in [`BallSum::margin`]).
-    fn switch_distance(self, elastic: f64x4, v_r: f64x4) -> f64x4;
+    fn switch_distance<V: Lanes>(self, elastic: V, v_r: V) -> V;
     /// Ball forces (N) from `elastic = K δ |δ|^{1/2}` (N), approach speeds `v_r`
     /// (m/s), `loaded` (all bits set where the ball is loaded, else 0) and `acting`
     /// (all bits set where the law is on its acting branch, naturally or as a held
     /// regime says).
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4;
+    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V;
 }
 
 /// Weight (s) of a damping switch in [`BallSum::margin`]: `v_r` (m/s) counts as the
@@ -134,25 +134,25 @@ trait LoadRule: Copy {
     /// The load mask of lane vector `i` with deflections `delta`, and the deflection
     /// the elastic force `K d |d|^{1/2}` takes: `δ` on loaded lanes, 0 elsewhere
     /// (so that unloaded lanes take the square root of 0).
-    fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4);
+    fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V);
     /// Where the damping law is on its acting branch, given where it is naturally
     /// (`natural`, from [`DampingLaw::acting`]).
-    fn acting(self, i: usize, natural: f64x4) -> f64x4;
+    fn acting<V: Lanes>(self, i: usize, natural: V) -> V;
     /// `margin` lowered by the lanes' signed distances from switching: `δ` where
     /// loaded, `−δ` where not, and with `law_switches` also the damping law's
     /// [`DampingLaw::switch_distance`] on loaded lanes (`+` where acting). The
     /// natural law cannot switch and leaves it alone.
-    fn margin(self, margin: f64x4, lane: LaneState, law_switches: bool) -> f64x4;
+    fn margin<V: Lanes>(self, margin: V, lane: LaneState<V>, law_switches: bool) -> V;
 }
 
 /// One lane vector's contact quantities, for [`LoadRule::margin`].
 #[derive(Clone, Copy)]
-struct LaneState {
-    delta: f64x4,
+struct LaneState<V> {
+    delta: V,
     /// [`DampingLaw::switch_distance`] (m).
-    distance: f64x4,
-    loaded: f64x4,
-    acting: f64x4,
+    distance: V,
+    loaded: V,
+    acting: V,
 }
 
 /// Loaded where `δ > 0`.
@@ -162,47 +162,48 @@ struct Natural;
 /// Loaded and acting as a held regime says.
 #[derive(Clone, Copy)]
 struct Held<'a> {
-    loaded: &'a [f64x4],
-    acting: &'a [f64x4],
+    loaded: &'a [F64x4],
+    acting: &'a [F64x4],
 }
 
 impl LoadRule for Natural {
     #[inline(always)]
-    fn load(self, _i: usize, delta: f64x4) -> (f64x4, f64x4) {
-        (delta.simd_gt(f64x4::ZERO), delta.fast_max(f64x4::ZERO))
+    fn load<V: Lanes>(self, _i: usize, delta: V) -> (V, V) {
+        (delta.simd_gt(V::zero()), delta.fast_max(V::zero()))
     }
 
     #[inline(always)]
-    fn acting(self, _i: usize, natural: f64x4) -> f64x4 {
+    fn acting<V: Lanes>(self, _i: usize, natural: V) -> V {
         natural
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, _lane: LaneState, _law_switches: bool) -> f64x4 {
+    fn margin<V: Lanes>(self, margin: V, _lane: LaneState<V>, _law_switches: bool) -> V {
         margin
     }
 }
 
 impl LoadRule for Held<'_> {
     #[inline(always)]
-    fn load(self, i: usize, delta: f64x4) -> (f64x4, f64x4) {
-        (self.loaded[i], delta & self.loaded[i])
+    fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V) {
+        let loaded = V::load(&self.loaded[i]);
+        (loaded, delta & loaded)
     }
 
     #[inline(always)]
-    fn acting(self, i: usize, _natural: f64x4) -> f64x4 {
-        self.acting[i]
+    fn acting<V: Lanes>(self, i: usize, _natural: V) -> V {
+        V::load(&self.acting[i])
     }
 
     #[inline(always)]
-    fn margin(self, margin: f64x4, l: LaneState, law_switches: bool) -> f64x4 {
+    fn margin<V: Lanes>(self, margin: V, l: LaneState<V>, law_switches: bool) -> V {
         // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone.
         let m = margin.fast_min(l.loaded.bitselect(l.delta, -l.delta));
         if !law_switches {
             return m;
         }
         let d = l.acting.bitselect(l.distance, -l.distance);
-        m.fast_min(l.loaded.bitselect(d, f64x4::splat(f64::INFINITY)))
+        m.fast_min(l.loaded.bitselect(d, V::splat(f64::INFINITY)))
     }
 }
 
@@ -228,17 +229,17 @@ impl DampingLaw for Undamped {
     const SWITCHES: bool = false;
 
     #[inline(always)]
-    fn acting(self, _elastic: f64x4, _v_r: f64x4) -> f64x4 {
-        f64x4::ZERO
+    fn acting<V: Lanes>(self, _elastic: V, _v_r: V) -> V {
+        V::zero()
     }
 
     #[inline(always)]
-    fn switch_distance(self, _elastic: f64x4, _v_r: f64x4) -> f64x4 {
-        f64x4::splat(f64::INFINITY)
+    fn switch_distance<V: Lanes>(self, _elastic: V, _v_r: V) -> V {
+        V::splat(f64::INFINITY)
     }
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, _v_r: f64x4, _loaded: f64x4, _acting: f64x4) -> f64x4 {
+    fn force<V: Lanes>(self, elastic: V, _v_r: V, _loaded: V, _acting: V) -> V {
         elastic
     }
 }
@@ -248,18 +249,18 @@ impl DampingLaw for CompressionOnly {
     const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn acting(self, _elastic: f64x4, v_r: f64x4) -> f64x4 {
-        v_r.simd_gt(f64x4::ZERO)
+    fn acting<V: Lanes>(self, _elastic: V, v_r: V) -> V {
+        v_r.simd_gt(V::zero())
     }
 
     #[inline(always)]
-    fn switch_distance(self, _elastic: f64x4, v_r: f64x4) -> f64x4 {
-        v_r * f64x4::splat(APPROACH_MARGIN_TIME)
+    fn switch_distance<V: Lanes>(self, _elastic: V, v_r: V) -> V {
+        v_r * V::splat(APPROACH_MARGIN_TIME)
     }
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4 {
-        elastic + ((f64x4::splat(self.0) * v_r) & (loaded & acting))
+    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V {
+        elastic + ((V::splat(self.0) * v_r) & (loaded & acting))
     }
 }
 
@@ -270,19 +271,19 @@ impl DampingLaw for TwoSided {
     const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn acting(self, elastic: f64x4, v_r: f64x4) -> f64x4 {
-        (elastic + f64x4::splat(self.0) * v_r).simd_gt(f64x4::ZERO)
+    fn acting<V: Lanes>(self, elastic: V, v_r: V) -> V {
+        (elastic + V::splat(self.0) * v_r).simd_gt(V::zero())
     }
 
     #[inline(always)]
-    fn switch_distance(self, elastic: f64x4, v_r: f64x4) -> f64x4 {
-        let total = elastic + f64x4::splat(self.0) * v_r;
-        total * f64x4::splat(APPROACH_MARGIN_TIME / self.0)
+    fn switch_distance<V: Lanes>(self, elastic: V, v_r: V) -> V {
+        let total = elastic + V::splat(self.0) * v_r;
+        total * V::splat(APPROACH_MARGIN_TIME / self.0)
     }
 
     #[inline(always)]
-    fn force(self, elastic: f64x4, v_r: f64x4, loaded: f64x4, acting: f64x4) -> f64x4 {
-        (elastic + f64x4::splat(self.0) * v_r) & (loaded & acting)
+    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V {
+        (elastic + V::splat(self.0) * v_r) & (loaded & acting)
     }
 }
 
@@ -304,9 +305,9 @@ struct Wave {
     /// Amplitude `Π_p` (m).
     amplitude: f64,
     /// `Π_p cos(N α_r)` per ball, [`LANES`] at a time (m; 0 on pads).
-    cos_term: Vec<f64x4>,
+    cos_term: Vec<F64x4>,
     /// `Π_p sin(N α_r)` per ball (m; 0 on pads).
-    sin_term: Vec<f64x4>,
+    sin_term: Vec<F64x4>,
 }
 
 /// The active damping law.
@@ -325,16 +326,16 @@ pub struct BallSet {
     law: Law,
     /// `cos α_r`, `sin α_r` of each ball's base angle `α_r = 2π(r−1)/N_b`, [`LANES`]
     /// balls per vector; 0 on pads.
-    dir_cos: Vec<f64x4>,
-    dir_sin: Vec<f64x4>,
+    dir_cos: Vec<F64x4>,
+    dir_sin: Vec<F64x4>,
     /// `−P_d/2 + Π_T,i + Π_T,o` (m).
     base_offset: f64,
     /// The base offset per ball; −∞ on pads.
-    base: Vec<f64x4>,
+    base: Vec<F64x4>,
     /// Harmonics of both races with nonzero amplitude.
     waves: Vec<Wave>,
     /// Scratch: `base + Σ waviness` per ball for the current evaluation (m).
-    offset: Vec<f64x4>,
+    offset: Vec<F64x4>,
     /// Scratch: the cage angle, each wave's phase `N ψ + φ`, then a caller's angle
     /// (rad), padded to a multiple of [`LANES`]; their sines and cosines.
     angles: Vec<f64>,
@@ -348,10 +349,10 @@ impl BallSet {
         let n = params.ball_count;
         let vectors = n.div_ceil(LANES);
         // [`LANES`]-wide vectors of `f(α_r)` over the balls, `pad` past the last ball.
-        let per_ball = |f: &dyn Fn(f64) -> f64, pad: f64| -> Vec<f64x4> {
+        let per_ball = |f: &dyn Fn(f64) -> f64, pad: f64| -> Vec<F64x4> {
             (0..vectors)
                 .map(|v| {
-                    f64x4::from(std::array::from_fn::<f64, LANES, _>(|l| {
+                    F64x4(std::array::from_fn::<f64, LANES, _>(|l| {
                         let r = v * LANES + l;
                         if r < n {
                             f(std::f64::consts::TAU * r as f64 / n as f64)
@@ -396,7 +397,7 @@ impl BallSet {
             dir_sin: per_ball(&f64::sin, 0.0),
             base_offset,
             base: per_ball(&|_| base_offset, f64::NEG_INFINITY),
-            offset: vec![f64x4::ZERO; vectors],
+            offset: vec![F64x4::ZERO; vectors],
             angles: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
             sines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
             cosines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
@@ -417,7 +418,20 @@ impl BallSet {
     /// `F = Σ F_r n_r`, the loaded-ball count and the switching margin at state `s`
     /// under the natural law (a ball is loaded when `δ_r > 0`). No allocation.
     pub fn force(&mut self, s: &ContactState) -> BallSum {
-        self.evaluate(s, None, None).0
+        self.force_on(Isa::detect(), s)
+    }
+
+    /// [`BallSet::force`] on the lanes of `isa` (the baseline if the CPU lacks it):
+    /// the same bits, for benchmarks of the instruction sets.
+    pub fn force_on(&mut self, isa: Isa, s: &ContactState) -> BallSum {
+        dispatch(
+            isa,
+            Evaluate {
+                set: self,
+                s,
+                regime: None,
+            },
+        )
     }
 
     /// As [`BallSet::force`], with the balls of `regime` loaded whatever the sign of
@@ -425,14 +439,23 @@ impl BallSet {
     /// continued as `K δ |δ|^{1/2}`, so the force stays smooth while the state moves
     /// on past a switch, and [`BallSum::margin`] turns negative.
     pub fn force_in(&mut self, s: &ContactState, regime: &Regime) -> BallSum {
-        self.evaluate(s, Some(regime), None).0
+        dispatch(
+            Isa::detect(),
+            Evaluate {
+                set: self,
+                s,
+                regime: Some(regime),
+            },
+        )
     }
 
     /// [`BallSet::force_in`] with `regime`, or [`BallSet::force`] without, and the
     /// `(sin, cos)` of a caller's `angle` (rad), if any, from the same SIMD `sin_cos`
     /// as the kernel's own angles (with up to two waviness harmonics, it adds
-    /// nothing); `(0, 1)` without one.
-    pub fn evaluate(
+    /// nothing); `(0, 1)` without one. Runs on lanes `V` ([`crate::simd`]; every
+    /// lane type gives the same bits).
+    #[inline(always)]
+    pub fn evaluate<V: Lanes>(
         &mut self,
         s: &ContactState,
         regime: Option<&Regime>,
@@ -440,20 +463,20 @@ impl BallSet {
     ) -> (BallSum, (f64, f64)) {
         let extra = 1 + self.waves.len();
         self.angles[extra] = angle.unwrap_or(0.0);
-        self.prepare(s, extra + usize::from(angle.is_some()));
+        self.prepare::<V>(s, extra + usize::from(angle.is_some()));
         let trig = match angle {
             Some(_) => (self.sines[extra], self.cosines[extra]),
             None => (0.0, 1.0),
         };
         let sum = match regime {
-            Some(r) => self.sum(
+            Some(r) => self.sum::<V, _>(
                 s,
                 Held {
                     loaded: &r.loaded,
                     acting: &r.acting,
                 },
             ),
-            None => self.sum(s, Natural),
+            None => self.sum::<V, _>(s, Natural),
         };
         (sum, trig)
     }
@@ -461,20 +484,21 @@ impl BallSet {
     /// An empty regime (no ball loaded) sized for this set.
     pub fn no_regime(&self) -> Regime {
         Regime {
-            loaded: vec![f64x4::ZERO; self.dir_cos.len()],
-            acting: vec![f64x4::ZERO; self.dir_cos.len()],
+            loaded: vec![F64x4::ZERO; self.dir_cos.len()],
+            acting: vec![F64x4::ZERO; self.dir_cos.len()],
         }
     }
 
-    /// Sets `regime` to the balls loaded at state `s` under the natural law.
+    /// Sets `regime` to the balls loaded at state `s` under the natural law. Off the
+    /// hot path (once per switch): it runs on the portable lanes.
     pub fn freeze(&mut self, s: &ContactState, regime: &mut Regime) {
-        self.prepare(s, 1 + self.waves.len());
+        self.prepare::<F64x4>(s, 1 + self.waves.len());
         let offset = self.current_offsets();
         let (sc, cc) = (self.sines[0], self.cosines[0]);
-        let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
-        let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
-        let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
-        let k = f64x4::splat(self.stiffness);
+        let (sc, cc) = (F64x4::splat(sc), F64x4::splat(cc));
+        let (ex, ey) = (F64x4::splat(s.e[0]), F64x4::splat(s.e[1]));
+        let (vx, vy) = (F64x4::splat(s.v[0]), F64x4::splat(s.v[1]));
+        let k = F64x4::splat(self.stiffness);
         let law = self.law;
         for (i, ((dc, ds), off)) in self
             .dir_cos
@@ -497,7 +521,7 @@ impl BallSet {
 
     /// The kernel under load rule `rule`, once [`BallSet::prepare`] has run for `s`.
     #[inline(always)]
-    fn sum<R: LoadRule>(&self, s: &ContactState, rule: R) -> BallSum {
+    fn sum<V: Lanes, R: LoadRule>(&self, s: &ContactState, rule: R) -> BallSum {
         let trig = (self.sines[0], self.cosines[0]);
         let k = self.stiffness;
         let balls = Balls {
@@ -506,14 +530,16 @@ impl BallSet {
             offset: self.current_offsets(),
         };
         match self.law {
-            Law::Undamped => sum_balls(balls, s, trig, k, Undamped, rule),
-            Law::CompressionOnly(c) => sum_balls(balls, s, trig, k, CompressionOnly(c), rule),
-            Law::TwoSided(c) => sum_balls(balls, s, trig, k, TwoSided(c), rule),
+            Law::Undamped => sum_balls::<V, _, _>(balls, s, trig, k, Undamped, rule),
+            Law::CompressionOnly(c) => {
+                sum_balls::<V, _, _>(balls, s, trig, k, CompressionOnly(c), rule)
+            }
+            Law::TwoSided(c) => sum_balls::<V, _, _>(balls, s, trig, k, TwoSided(c), rule),
         }
     }
 
     /// The per-ball offsets of the evaluation [`BallSet::prepare`] set up (m).
-    fn current_offsets(&self) -> &[f64x4] {
+    fn current_offsets(&self) -> &[F64x4] {
         if self.waves.is_empty() {
             &self.base
         } else {
@@ -527,7 +553,8 @@ impl BallSet {
     ///
     /// The first `used` angles are needed. Two or fewer take the scalar `sin_cos`,
     /// which is cheaper than one [`sin_cos4`] for them.
-    fn prepare(&mut self, s: &ContactState, used: usize) {
+    #[inline(always)]
+    fn prepare<V: Lanes>(&mut self, s: &ContactState, used: usize) {
         self.angles[0] = s.cage;
         for (a, w) in self.angles[1..].iter_mut().zip(&self.waves) {
             let psi = match w.race {
@@ -552,13 +579,13 @@ impl BallSet {
                 .zip(self.cosines.chunks_exact_mut(LANES))
                 .take(used.div_ceil(LANES))
             {
-                let (vs, vc) = sin_cos4([a[0], a[1], a[2], a[3]]);
+                let (vs, vc) = sin_cos4::<V>([a[0], a[1], a[2], a[3]]);
                 sn.copy_from_slice(&vs);
                 cs.copy_from_slice(&vc);
             }
         }
         if !self.waves.is_empty() {
-            fill_offsets(
+            fill_offsets::<V>(
                 &mut self.offset,
                 &self.base,
                 &self.waves,
@@ -615,17 +642,18 @@ impl BallSet {
 
 /// `offset[r] = base[r] + Σ_h Π_p,h sin(N_h α_r + x_h)` with `x_h = N_h ψ + φ_h`
 /// given by its sine and cosine: `sin(N α_r + x) = sin x cos N α_r + cos x sin N α_r`.
-fn fill_offsets(
-    offset: &mut [f64x4],
-    base: &[f64x4],
+#[inline(always)]
+fn fill_offsets<V: Lanes>(
+    offset: &mut [F64x4],
+    base: &[F64x4],
     waves: &[Wave],
     (sines, cosines): (&[f64], &[f64]),
 ) {
     offset.copy_from_slice(base);
     for ((w, &sn), &cs) in waves.iter().zip(sines).zip(cosines) {
-        let (sn, cs) = (f64x4::splat(sn), f64x4::splat(cs));
+        let (sn, cs) = (V::splat(sn), V::splat(cs));
         for ((o, c), s) in offset.iter_mut().zip(&w.cos_term).zip(&w.sin_term) {
-            *o += sn * *c + cs * *s;
+            *o = (V::load(o) + (sn * V::load(c) + cs * V::load(s))).store();
         }
     }
 }
@@ -633,9 +661,9 @@ fn fill_offsets(
 /// The per-ball data of one evaluation: base directions and offsets (m).
 #[derive(Clone, Copy)]
 struct Balls<'a> {
-    dir_cos: &'a [f64x4],
-    dir_sin: &'a [f64x4],
-    offset: &'a [f64x4],
+    dir_cos: &'a [F64x4],
+    dir_sin: &'a [F64x4],
+    offset: &'a [F64x4],
 }
 
 /// The branch-free ball loop, [`LANES`] balls per iteration, with the cage angle's
@@ -643,7 +671,7 @@ struct Balls<'a> {
 /// `K δ^{3/2}` under the natural law, its smooth continuation under a held regime).
 /// Unloaded lanes take the square root of 0, which `sqrtpd` finishes early.
 #[inline(always)]
-fn sum_balls<D: DampingLaw, R: LoadRule>(
+fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule>(
     balls: Balls<'_>,
     s: &ContactState,
     (sc, cc): (f64, f64),
@@ -651,12 +679,12 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
     law: D,
     rule: R,
 ) -> BallSum {
-    let (sc, cc) = (f64x4::splat(sc), f64x4::splat(cc));
-    let (ex, ey) = (f64x4::splat(s.e[0]), f64x4::splat(s.e[1]));
-    let (vx, vy) = (f64x4::splat(s.v[0]), f64x4::splat(s.v[1]));
-    let k = f64x4::splat(stiffness);
-    let (mut fx, mut fy, mut loaded) = (f64x4::ZERO, f64x4::ZERO, f64x4::ZERO);
-    let mut margin = f64x4::splat(f64::INFINITY);
+    let (sc, cc) = (V::splat(sc), V::splat(cc));
+    let (ex, ey) = (V::splat(s.e[0]), V::splat(s.e[1]));
+    let (vx, vy) = (V::splat(s.v[0]), V::splat(s.v[1]));
+    let k = V::splat(stiffness);
+    let (mut fx, mut fy, mut loaded) = (V::zero(), V::zero(), V::zero());
+    let mut margin = V::splat(f64::INFINITY);
     for (i, ((dc, ds), off)) in balls
         .dir_cos
         .iter()
@@ -664,9 +692,10 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
         .zip(balls.offset)
         .enumerate()
     {
-        let nx = cc * *dc - sc * *ds;
-        let ny = sc * *dc + cc * *ds;
-        let delta = ex * nx + ey * ny + *off;
+        let (dc, ds) = (V::load(dc), V::load(ds));
+        let nx = cc * dc - sc * ds;
+        let ny = sc * dc + cc * ds;
+        let delta = ex * nx + ey * ny + V::load(off);
         let (mask, d) = rule.load(i, delta);
         let v_r = vx * nx + vy * ny;
         let elastic = k * d * d.abs().sqrt();
@@ -676,7 +705,7 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
             distance: if D::SWITCHES {
                 law.switch_distance(elastic, v_r)
             } else {
-                f64x4::ZERO
+                V::zero()
             },
             loaded: mask,
             acting,
@@ -685,11 +714,27 @@ fn sum_balls<D: DampingLaw, R: LoadRule>(
         let f = law.force(elastic, v_r, mask, acting);
         fx += f * nx;
         fy += f * ny;
-        loaded += f64x4::ONE & mask;
+        loaded += V::splat(1.0) & mask;
     }
     BallSum {
         force: [fx.reduce_add(), fy.reduce_add()],
         loaded: loaded.reduce_add() as usize,
         margin: margin.to_array().into_iter().fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// [`BallSet::evaluate`] without a caller's angle, as a [`LaneTask`].
+struct Evaluate<'a> {
+    set: &'a mut BallSet,
+    s: &'a ContactState,
+    regime: Option<&'a Regime>,
+}
+
+impl LaneTask for Evaluate<'_> {
+    type Output = BallSum;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> BallSum {
+        self.set.evaluate::<V>(self.s, self.regime, None).0
     }
 }

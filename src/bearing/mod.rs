@@ -185,6 +185,7 @@ impl CageWeights {
 
     /// The kernel state for eccentricity `e` (m), its rate `v` (m/s), and the
     /// journal's and housing's rotations since `t = 0` (rad).
+    #[inline(always)]
     pub fn contact_state(
         self,
         e: [f64; 2],

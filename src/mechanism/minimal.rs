@@ -24,6 +24,7 @@
 
 use crate::bearing::{BallSet, BallSum, CageWeights, Regime};
 use crate::error::{ModelError, ParamError};
+use crate::simd::{dispatch, Isa, LaneTask, Lanes};
 use crate::solve::OdeSystem;
 
 use super::{CaseParams, Location, Sample, GRAVITY};
@@ -49,6 +50,7 @@ struct Constants {
 impl Constants {
     /// Kinematics at crank angle `ω t` given as `(sin, cos)`, eccentricity `e` (m)
     /// and its rate `ed` (m/s).
+    #[inline(always)]
     fn kinematics(
         &self,
         (uy, ux): (f64, f64),
@@ -92,6 +94,7 @@ impl Constants {
     }
 
     /// `ë` (m/s²) from the reduced equations for bearing force `f` on the housing (N).
+    #[inline(always)]
     fn eccentricity_acceleration(&self, kin: &Kinematics, f: [f64; 2]) -> [f64; 2] {
         let k = self;
         let (t, cg) = (kin.tan, k.crank_moves);
@@ -158,6 +161,8 @@ pub struct MinimalSliderCrank {
     location: Location,
     k: Constants,
     bearing: Option<Bearing>,
+    /// The instruction set of the right-hand side ([`Isa::detect`] by default).
+    isa: Isa,
 }
 
 impl MinimalSliderCrank {
@@ -194,7 +199,19 @@ impl MinimalSliderCrank {
                 g: if case.gravity { GRAVITY } else { 0.0 },
             },
             bearing,
+            isa: Isa::detect(),
         })
+    }
+
+    /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on
+    /// the baseline; returns the one in effect. Results are bit-identical either
+    /// way; this is for benchmarks and parity tests.
+    pub fn set_isa(&mut self, isa: Isa) -> Isa {
+        self.isa = match (isa, Isa::detect()) {
+            (Isa::Avx, Isa::Avx) => Isa::Avx,
+            _ => Isa::Baseline,
+        };
+        self.isa
     }
 
     /// Where the bearing sits.
@@ -210,8 +227,10 @@ impl MinimalSliderCrank {
 
     /// Kinematics, bearing force and `ë` at `(t, y)`, with the balls loaded as the
     /// held regime says if `held` (else by the sign of `δ`); no force and `ë = 0`
-    /// for the ideal mechanism.
-    fn solve(
+    /// for the ideal mechanism. Runs on lanes `V`; inlined into each instruction
+    /// set's version of its callers.
+    #[inline(always)]
+    fn solve<V: Lanes>(
         &mut self,
         t: f64,
         y: &[f64],
@@ -232,7 +251,7 @@ impl MinimalSliderCrank {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
             Location::CrankGround => {
                 let state = w.weights.contact_state(e, ed, crank, 0.0);
-                let (sum, trig) = w.balls.evaluate(&state, regime, Some(crank));
+                let (sum, trig) = w.balls.evaluate::<V>(&state, regime, Some(crank));
                 (k.kinematics(trig, e, ed)?, sum)
             }
             // The journal turns with the rod, whose angle needs the crank's first.
@@ -240,7 +259,7 @@ impl MinimalSliderCrank {
                 let kin = k.kinematics(crank.sin_cos(), e, ed)?;
                 let (journal, housing) = race_turns(self.location, crank, &kin);
                 let state = w.weights.contact_state(e, ed, journal, housing);
-                (kin, w.balls.evaluate(&state, regime, None).0)
+                (kin, w.balls.evaluate::<V>(&state, regime, None).0)
             }
         };
         w.margin = sum.margin;
@@ -251,7 +270,13 @@ impl MinimalSliderCrank {
     /// The natural law applies (a ball is loaded when `δ > 0`) whatever regime an
     /// integrator holds.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
-        let (kin, sum, edd) = self.solve(t, y, false)?;
+        dispatch(self.isa, SampleTask { sys: self, t, y })
+    }
+
+    /// [`MinimalSliderCrank::sample`] on lanes `V`.
+    #[inline(always)]
+    fn sample_in<V: Lanes>(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
+        let (kin, sum, edd) = self.solve::<V>(t, y, false)?;
         let k = self.k;
         let (u, tan, cg) = (kin.u, kin.tan, k.crank_moves);
         let theta_dd = kin.k_theta * edd[1] + kin.theta_dd0;
@@ -323,7 +348,15 @@ impl OdeSystem for MinimalSliderCrank {
             return Ok(());
         }
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
-        let (_, _, edd) = self.solve(t, y, held)?;
+        let edd = dispatch(
+            self.isa,
+            RhsTask {
+                sys: self,
+                t,
+                y,
+                held,
+            },
+        )?;
         dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
         Ok(())
     }
@@ -354,6 +387,39 @@ impl OdeSystem for MinimalSliderCrank {
 
     fn margin(&self) -> f64 {
         self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
+    }
+}
+
+/// `ë` (m/s²) of [`OdeSystem::rhs`] as a [`LaneTask`].
+struct RhsTask<'a> {
+    sys: &'a mut MinimalSliderCrank,
+    t: f64,
+    y: &'a [f64],
+    held: bool,
+}
+
+impl LaneTask for RhsTask<'_> {
+    type Output = Result<[f64; 2], ModelError>;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Self::Output {
+        Ok(self.sys.solve::<V>(self.t, self.y, self.held)?.2)
+    }
+}
+
+/// [`MinimalSliderCrank::sample`] as a [`LaneTask`].
+struct SampleTask<'a> {
+    sys: &'a mut MinimalSliderCrank,
+    t: f64,
+    y: &'a [f64],
+}
+
+impl LaneTask for SampleTask<'_> {
+    type Output = Result<Sample, ModelError>;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Self::Output {
+        self.sys.sample_in::<V>(self.t, self.y)
     }
 }
 
