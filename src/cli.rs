@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use studyrun::run::{self, RunOptions, Shard};
+use studyrun::simd::Isa;
 use studyrun::simulate::{simulate, Sampling, CHANNELS};
 use studyrun::study::params::lookup;
 use studyrun::study::{Study, StudyError};
@@ -33,7 +34,10 @@ Examples:
   studyrun accuracy studies/accuracy.yaml          error and cost of every integrator setting
   studyrun accuracy grid.yaml --methods tsit5      only one integrator's settings
 
-Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.";
+Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.
+
+Environment: STUDYRUN_ISA=baseline runs the hot paths on SSE2 instead of AVX (the
+results are the same bits; for speed comparisons); unset, the widest the CPU has.";
 
 /// Parameter studies of a ball bearing with raceway waviness in a slider-crank.
 #[derive(Parser)]
@@ -126,6 +130,10 @@ struct RunArgs {
 /// Parses the command line, runs the command and maps the outcome to an exit code.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = Isa::requested() {
+        eprintln!("studyrun: error: {e}");
+        return ExitCode::from(EXIT_INVALID);
+    }
     let outcome = match cli.command {
         Some(Command::Run(args)) => run_command(args),
         None => run_command(cli.run),

@@ -108,14 +108,58 @@ pub enum Isa {
     Avx,
 }
 
+/// Environment variable that chooses the instruction set: `baseline` or `avx`;
+/// unset or empty means the widest the CPU has. The results are the same bits
+/// either way, so it is for speed comparisons (and for checking that claim).
+pub const ISA_ENV: &str = "STUDYRUN_ISA";
+
+/// A value of [`ISA_ENV`] that cannot be honoured.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{ISA_ENV}={value:?}: {reason}")]
+pub struct IsaEnvError {
+    /// The variable's value.
+    pub value: String,
+    /// Why it is refused, with what is allowed.
+    pub reason: &'static str,
+}
+
 impl Isa {
-    /// AVX when this is x86-64 and the CPU reports it, else the baseline.
-    pub fn detect() -> Self {
+    /// The widest instruction set of this CPU: AVX on x86-64 CPUs that report it,
+    /// else the baseline.
+    pub fn of_cpu() -> Self {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             return Isa::Avx;
         }
         Isa::Baseline
+    }
+
+    /// The instruction set [`ISA_ENV`] asks for ([`Isa::of_cpu`] when it is unset or
+    /// empty); an error for a value other than `baseline` or `avx`, or `avx` on a CPU
+    /// without it.
+    pub fn requested() -> Result<Self, IsaEnvError> {
+        let value = std::env::var(ISA_ENV).unwrap_or_default();
+        match value.as_str() {
+            "" => Ok(Isa::of_cpu()),
+            "baseline" => Ok(Isa::Baseline),
+            "avx" if Isa::of_cpu() == Isa::Avx => Ok(Isa::Avx),
+            "avx" => Err(IsaEnvError {
+                value,
+                reason: "this CPU has no AVX; allowed: baseline, or unset",
+            }),
+            _ => Err(IsaEnvError {
+                value,
+                reason: "allowed: baseline, avx, or unset for the widest the CPU has",
+            }),
+        }
+    }
+
+    /// The instruction set the hot paths use: [`Isa::requested`], read once per
+    /// process; an invalid request (which the command line refuses up front) falls
+    /// back to [`Isa::of_cpu`].
+    pub fn detect() -> Self {
+        static CHOSEN: std::sync::OnceLock<Isa> = std::sync::OnceLock::new();
+        *CHOSEN.get_or_init(|| Isa::requested().unwrap_or_else(|_| Isa::of_cpu()))
     }
 }
 

@@ -167,6 +167,37 @@ fn same_data_for_any_number_of_threads() {
     assert_same_data(&dir.path().join("one.h5"), &dir.path().join("two.h5"));
 }
 
+/// The SSE2 baseline (`STUDYRUN_ISA=baseline`) and the widest instruction set of
+/// this CPU write the same bits; a value that cannot be honoured exits 2 naming the
+/// variable, its value and what is allowed, before anything runs.
+#[test]
+fn same_data_on_every_instruction_set() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "small.yaml", SMALL);
+    let run = |isa: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_studyrun"))
+            .current_dir(dir.path())
+            .env("STUDYRUN_ISA", isa)
+            .args(["small.yaml", "-o", out, "-q"])
+            .output()
+            .unwrap()
+    };
+    assert!(run("baseline", "baseline.h5").status.success());
+    assert!(run("", "widest.h5").status.success());
+    assert_same_data(
+        &dir.path().join("baseline.h5"),
+        &dir.path().join("widest.h5"),
+    );
+    let bad = run("avx512", "bad.h5");
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("STUDYRUN_ISA=\"avx512\"") && err.contains("allowed: baseline"),
+        "{err}"
+    );
+    assert!(!dir.path().join("bad.h5").exists());
+}
+
 #[test]
 fn shards_merge_into_the_single_run() {
     let dir = tempfile::tempdir().unwrap();

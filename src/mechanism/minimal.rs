@@ -207,7 +207,7 @@ impl MinimalSliderCrank {
     /// the baseline; returns the one in effect. Results are bit-identical either
     /// way; this is for benchmarks and parity tests.
     pub fn set_isa(&mut self, isa: Isa) -> Isa {
-        self.isa = match (isa, Isa::detect()) {
+        self.isa = match (isa, Isa::of_cpu()) {
             (Isa::Avx, Isa::Avx) => Isa::Avx,
             _ => Isa::Baseline,
         };
