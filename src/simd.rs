@@ -183,51 +183,11 @@ pub fn dispatch<T: LaneTask>(isa: Isa, task: T) -> T::Output {
 }
 
 /// Implements the arithmetic and bit operators of a [`Lanes`] type from a binary
-/// function per operator.
+/// function per operator (`Neg` flips the sign bit, `AddAssign` adds).
 macro_rules! operators {
     ($ty:ty, $add:expr, $sub:expr, $mul:expr, $and:expr, $or:expr, $xor:expr) => {
-        impl Add for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn add(self, o: Self) -> Self {
-                $add(self, o)
-            }
-        }
-        impl Sub for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn sub(self, o: Self) -> Self {
-                $sub(self, o)
-            }
-        }
-        impl Mul for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn mul(self, o: Self) -> Self {
-                $mul(self, o)
-            }
-        }
-        impl BitAnd for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn bitand(self, o: Self) -> Self {
-                $and(self, o)
-            }
-        }
-        impl BitOr for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn bitor(self, o: Self) -> Self {
-                $or(self, o)
-            }
-        }
-        impl BitXor for $ty {
-            type Output = Self;
-            #[inline(always)]
-            fn bitxor(self, o: Self) -> Self {
-                $xor(self, o)
-            }
-        }
+        operators!(@binary $ty, Add add $add, Sub sub $sub, Mul mul $mul,
+            BitAnd bitand $and, BitOr bitor $or, BitXor bitxor $xor);
         impl Neg for $ty {
             type Output = Self;
             #[inline(always)]
@@ -242,6 +202,15 @@ macro_rules! operators {
             }
         }
     };
+    (@binary $ty:ty, $($trait:ident $method:ident $f:expr),*) => {$(
+        impl $trait for $ty {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                $f(self, o)
+            }
+        }
+    )*};
 }
 
 impl F64x4 {

@@ -32,6 +32,8 @@
 //! waviness height from its own `sin`, as a reference for parity tests and for the
 //! energy terms.
 
+use std::cell::Cell;
+
 use crate::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
 use crate::trig::sin_cos4;
 
@@ -204,6 +206,34 @@ impl LoadRule for Held<'_> {
         }
         let d = l.acting.bitselect(l.distance, -l.distance);
         m.fast_min(l.loaded.bitselect(d, V::splat(f64::INFINITY)))
+    }
+}
+
+/// Loaded and acting by the natural law, recording both masks of each lane vector
+/// (for [`BallSet::freeze`]).
+#[derive(Clone, Copy)]
+struct Recording<'a> {
+    loaded: &'a [Cell<F64x4>],
+    acting: &'a [Cell<F64x4>],
+}
+
+impl LoadRule for Recording<'_> {
+    #[inline(always)]
+    fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V) {
+        let (loaded, d) = Natural.load(i, delta);
+        self.loaded[i].set(loaded.store());
+        (loaded, d)
+    }
+
+    #[inline(always)]
+    fn acting<V: Lanes>(self, i: usize, natural: V) -> V {
+        self.acting[i].set(natural.store());
+        natural
+    }
+
+    #[inline(always)]
+    fn margin<V: Lanes>(self, margin: V, lane: LaneState<V>, law_switches: bool) -> V {
+        Natural.margin(margin, lane, law_switches)
     }
 }
 
@@ -424,12 +454,17 @@ impl BallSet {
     /// [`BallSet::force`] on the lanes of `isa` (the baseline if the CPU lacks it):
     /// the same bits, for benchmarks of the instruction sets.
     pub fn force_on(&mut self, isa: Isa, s: &ContactState) -> BallSum {
+        self.evaluate_on(isa, s, None)
+    }
+
+    /// [`BallSet::evaluate`] without a caller's angle, on the lanes of `isa`.
+    fn evaluate_on(&mut self, isa: Isa, s: &ContactState, regime: Option<&Regime>) -> BallSum {
         dispatch(
             isa,
             Evaluate {
                 set: self,
                 s,
-                regime: None,
+                regime,
             },
         )
     }
@@ -439,14 +474,7 @@ impl BallSet {
     /// continued as `K δ |δ|^{1/2}`, so the force stays smooth while the state moves
     /// on past a switch, and [`BallSum::margin`] turns negative.
     pub fn force_in(&mut self, s: &ContactState, regime: &Regime) -> BallSum {
-        dispatch(
-            Isa::detect(),
-            Evaluate {
-                set: self,
-                s,
-                regime: Some(regime),
-            },
-        )
+        self.evaluate_on(Isa::detect(), s, Some(regime))
     }
 
     /// [`BallSet::force_in`] with `regime`, or [`BallSet::force`] without, and the
@@ -489,34 +517,16 @@ impl BallSet {
         }
     }
 
-    /// Sets `regime` to the balls loaded at state `s` under the natural law. Off the
-    /// hot path (once per switch): it runs on the portable lanes.
+    /// Sets `regime` to the balls loaded at state `s` under the natural law, and to
+    /// where the damping law acts there: one pass of the kernel that records its
+    /// masks. Off the hot path (once per switch): it runs on the portable lanes.
     pub fn freeze(&mut self, s: &ContactState, regime: &mut Regime) {
         self.prepare::<F64x4>(s, 1 + self.waves.len());
-        let offset = self.current_offsets();
-        let (sc, cc) = (self.sines[0], self.cosines[0]);
-        let (sc, cc) = (F64x4::splat(sc), F64x4::splat(cc));
-        let (ex, ey) = (F64x4::splat(s.e[0]), F64x4::splat(s.e[1]));
-        let (vx, vy) = (F64x4::splat(s.v[0]), F64x4::splat(s.v[1]));
-        let k = F64x4::splat(self.stiffness);
-        let law = self.law;
-        for (i, ((dc, ds), off)) in self
-            .dir_cos
-            .iter()
-            .zip(&self.dir_sin)
-            .zip(offset)
-            .enumerate()
-        {
-            let (nx, ny) = (cc * *dc - sc * *ds, sc * *dc + cc * *ds);
-            let (loaded, d) = Natural.load(i, ex * nx + ey * ny + *off);
-            let (elastic, v_r) = (k * d * d.sqrt(), vx * nx + vy * ny);
-            regime.loaded[i] = loaded;
-            regime.acting[i] = match law {
-                Law::Undamped => Undamped.acting(elastic, v_r),
-                Law::CompressionOnly(c) => CompressionOnly(c).acting(elastic, v_r),
-                Law::TwoSided(c) => TwoSided(c).acting(elastic, v_r),
-            };
-        }
+        let rule = Recording {
+            loaded: Cell::from_mut(&mut regime.loaded[..]).as_slice_of_cells(),
+            acting: Cell::from_mut(&mut regime.acting[..]).as_slice_of_cells(),
+        };
+        self.sum::<F64x4, _>(s, rule);
     }
 
     /// The kernel under load rule `rule`, once [`BallSet::prepare`] has run for `s`.

@@ -409,8 +409,8 @@ const NUDGE: f64 = 0.5 * EVENT_RESOLUTION;
 /// not strictly inside it, stopping when no time between the ends is left).
 /// Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the
 /// state there in `y_event`, or `None` when the extension does not cross (a stage
-/// state strayed, the trajectory did not). `f_end` is scratch for the slopes; each `g` costs one
-/// evaluation of `f`.
+/// state strayed, the trajectory did not). `f_end` is scratch for the slopes; each
+/// `g` costs one evaluation of `f`.
 fn locate<S: OdeSystem>(
     sys: &mut S,
     ends: &StepEnds<'_>,
