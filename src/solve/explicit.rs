@@ -76,18 +76,63 @@ enum StepOutcome {
     ModelFailed(SolveError),
 }
 
-/// `h Σ_j w_j k_j[m]`: component `m` of the increment with weights `w` over the
-/// stage-major slopes `k` of `n` components each.
-fn increment(h: f64, w: impl Iterator<Item = f64>, k: &[f64], n: usize, m: usize) -> f64 {
-    h * w.enumerate().map(|(j, wj)| wj * k[j * n + m]).sum::<f64>()
+/// `out[m] = base[m] + h Σ_j w_j k_j[m]` for every component `m` (`base` absent:
+/// just the increment), with weights `w` over the stage-major slopes `k` of `n`
+/// components each.
+///
+/// The sum runs over the stages outermost, four components side by side in registers
+/// (independent add chains instead of one serial chain per component); each component
+/// still adds its terms in stage order from `-0.0`, so the result is the same as the
+/// plain per-component sum, bit for bit.
+fn weighted_sum<W>(h: f64, w: W, k: &[f64], n: usize, base: Option<&[f64]>, out: &mut [f64])
+where
+    W: Iterator<Item = f64> + Clone,
+{
+    let mut m0 = 0;
+    let mut chunks = out.chunks_exact_mut(LANES);
+    for chunk in &mut chunks {
+        components::<LANES, W>(h, w.clone(), k, n, base, m0, chunk);
+        m0 += LANES;
+    }
+    for o in chunks.into_remainder().chunks_exact_mut(1) {
+        components::<1, W>(h, w.clone(), k, n, base, m0, o);
+        m0 += 1;
+    }
+}
+
+/// Components kept side by side by [`weighted_sum`].
+const LANES: usize = 4;
+
+/// [`weighted_sum`] for the `L` components `m0 .. m0 + L` (a fixed-size accumulator,
+/// so it lives in registers).
+#[inline(always)]
+fn components<const L: usize, W: Iterator<Item = f64>>(
+    h: f64,
+    w: W,
+    k: &[f64],
+    n: usize,
+    base: Option<&[f64]>,
+    m0: usize,
+    out: &mut [f64],
+) {
+    let mut acc = [-0.0; L];
+    for (j, wj) in w.enumerate() {
+        let row = &k[j * n + m0..][..L];
+        for (a, kj) in acc.iter_mut().zip(row) {
+            *a += wj * kj;
+        }
+    }
+    for (l, (o, a)) in out.iter_mut().zip(acc).enumerate() {
+        *o = match base {
+            Some(b) => b[m0 + l] + h * a,
+            None => h * a,
+        };
+    }
 }
 
 /// `out = y + h Σ_j w_j k_j` over the stage-major slopes `k`.
 fn combine(y: &[f64], h: f64, weights: &[f64], k: &[f64], out: &mut [f64]) {
-    let n = y.len();
-    for (m, o) in out.iter_mut().enumerate() {
-        *o = y[m] + increment(h, weights.iter().copied(), k, n, m);
-    }
+    weighted_sum(h, weights.iter().copied(), k, y.len(), Some(y), out);
 }
 
 /// Stage `i` of a step of size `h` (s) from `(t, y)`, with node `c` and row `a` of
@@ -165,17 +210,13 @@ fn take_step<S: OdeSystem>(
 /// `h Σ (b_i − b̂₃_i) k_i`. Non-finite when a slope is.
 fn error_norm(tab: &ExplicitTableau, tol: Tolerance, h: f64, w: &mut Workspace) -> f64 {
     let n = w.n;
-    for (m, e) in w.scratch.iter_mut().enumerate() {
-        *e = increment(h, tab.e.iter().copied(), &w.k, n, m);
-    }
+    weighted_sum(h, tab.e.iter().copied(), &w.k, n, None, &mut w.scratch);
     let err = tol.norm(&w.scratch, &w.y, &w.y_new);
     if tab.b_hat_low.is_empty() {
         return err;
     }
-    for (m, e) in w.scratch.iter_mut().enumerate() {
-        let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh);
-        *e = increment(h, weights, &w.k, n, m);
-    }
+    let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh);
+    weighted_sum(h, weights, &w.k, n, None, &mut w.scratch);
     let err_low = tol.norm(&w.scratch, &w.y, &w.y_new);
     let denominator = err * err + 0.01 * err_low * err_low;
     if denominator == 0.0 {
@@ -214,9 +255,7 @@ fn prepare_dense<S: OdeSystem>(
         w.margins[s + x] = sys.margin();
     }
     for (row, d) in w.cont.chunks_exact_mut(n).zip(dense.d) {
-        for (m, f) in row.iter_mut().enumerate() {
-            *f = increment(h, d.iter().copied(), &w.k, n, m);
-        }
+        weighted_sum(h, d.iter().copied(), &w.k, n, None, row);
     }
     StepOutcome::Done
 }
