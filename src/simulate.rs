@@ -208,7 +208,12 @@ pub fn simulate(
     let start = Instant::now();
     let mut mech = MinimalSliderCrank::new(case)?;
     let times = sampling.times();
-    let mut channels = vec![Vec::with_capacity(times.len()); CHANNELS.len()];
+    // Each series gets its full length up front (`vec![v; n]` would clone `v`
+    // without its capacity, and the series would grow by reallocation).
+    let mut channels: Vec<Vec<f64>> = CHANNELS
+        .iter()
+        .map(|_| Vec::with_capacity(times.len()))
+        .collect();
     let location = case.location;
     let mut record = |m: &mut MinimalSliderCrank, t: f64, y: &[f64]| {
         let s = m.sample(t, y)?;
