@@ -74,27 +74,32 @@ pub fn default_window_start(rpm: f64) -> f64 {
 /// Metrics of `case` (a bearing case) against `ideal` (same speed and sampling),
 /// over samples at `t >= t_from` (s).
 pub fn vibration_metrics(case: &CaseOutput, ideal: &CaseOutput, t_from: f64) -> VibrationMetrics {
-    let series = |o: &CaseOutput, name: &str| o.channel(name).expect("channel exists").to_vec();
+    // Sample times increase, so the window is a suffix: only it is read (and only
+    // its ideal force magnitudes are computed).
+    let k0 = case.times.partition_point(|&t| t < t_from);
+    fn window<'a>(o: &'a CaseOutput, name: &str, k0: usize) -> &'a [f64] {
+        &o.channel(name).expect("channel exists")[k0..]
+    }
     let joint = match case.location {
         Location::CrankRod => ("crank_rod_force_x", "crank_rod_force_y"),
         _ => ("crank_ground_force_x", "crank_ground_force_y"),
     };
-    let ideal_force: Vec<f64> = series(ideal, joint.0)
+    let ideal_force: Vec<f64> = window(ideal, joint.0, k0)
         .iter()
-        .zip(series(ideal, joint.1))
-        .map(|(x, y)| x.hypot(y))
+        .zip(window(ideal, joint.1, k0))
+        .map(|(x, y)| x.hypot(*y))
         .collect();
-    let dev = |a: &[f64], b: &[f64]| Deviation::between(a, b, &case.times, t_from);
+    let times = &case.times[k0..];
+    let dev = |name: &str, reference: &[f64]| {
+        Deviation::between(window(case, name, k0), reference, times, t_from)
+    };
     VibrationMetrics {
         slider_acceleration: dev(
-            &series(case, "slider_acceleration"),
-            &series(ideal, "slider_acceleration"),
+            "slider_acceleration",
+            window(ideal, "slider_acceleration", k0),
         ),
-        crank_moment: dev(
-            &series(case, "crank_moment"),
-            &series(ideal, "crank_moment"),
-        ),
-        bearing_force: dev(&series(case, "bearing_force"), &ideal_force),
+        crank_moment: dev("crank_moment", window(ideal, "crank_moment", k0)),
+        bearing_force: dev("bearing_force", &ideal_force),
     }
 }
 
