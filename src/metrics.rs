@@ -74,12 +74,12 @@ pub fn default_window_start(rpm: f64) -> f64 {
 /// Metrics of `case` (a bearing case) against `ideal` (same speed and sampling),
 /// over samples at `t >= t_from` (s).
 pub fn vibration_metrics(case: &CaseOutput, ideal: &CaseOutput, t_from: f64) -> VibrationMetrics {
-    // Sample times increase, so the window is a suffix: only it is read (and only
-    // its ideal force magnitudes are computed).
-    let k0 = case.times.partition_point(|&t| t < t_from);
     fn window<'a>(o: &'a CaseOutput, name: &str, k0: usize) -> &'a [f64] {
         &o.channel(name).expect("channel exists")[k0..]
     }
+    // Sample times increase, so the window is a suffix: only it is read (and only
+    // its ideal force magnitudes are computed).
+    let k0 = case.times.partition_point(|&t| t < t_from);
     let joint = match case.location {
         Location::CrankRod => ("crank_rod_force_x", "crank_rod_force_y"),
         _ => ("crank_ground_force_x", "crank_ground_force_y"),
