@@ -136,7 +136,8 @@ def _deviation_note(ds, channel, case):
     if metric not in ds:
         return ""
     value = float(ds[metric].values[case])
-    return f"RMS deviation (t ≥ {float(ds.attrs['transient']):g} s): {value:.3g} {unit_text(ds, channel)}"
+    return (f"RMS deviation ({float(ds.attrs['transient']):g} s ≤ t < {float(ds.attrs['duration']):g} s): "
+            f"{value:.3g} {unit_text(ds, channel)}")
 
 
 def paper_panels(
@@ -210,7 +211,7 @@ def _default_fmax(marks, nyquist):
 def spectra(
     ds, location, rpm, waviness_amplitude, channel, out, fmax=None, select=None, ball_counts=None, dpi=90
 ):
-    """Amplitude spectra of `channel` (stored `<channel>_spectrum`, t ≥ transient,
+    """Amplitude spectra of `channel` (stored `<channel>_spectrum`, transient ≤ t < duration,
     Hann window) per ball count, the ideal mechanism's spectrum in grey, and the
     characteristic frequencies of MODEL.md §4 marked (see analysis.frequencies):
     cage f_c, ball pass N_b f_out and N_b f_in, waviness N_o f_out and N_i f_in.
@@ -254,7 +255,7 @@ def spectra(
     axes[0, 0].set_xlim(0.8 * min(lowest, freq[1]), fmax)
     axes[-1, 0].set_xlabel("frequency (Hz)")
     resolution = freq[1] - freq[0]
-    fig.suptitle(f"amplitude spectrum of {CHANNEL_TEXT[channel]} (t ≥ {float(ds.attrs['transient']):g} s, "
+    fig.suptitle(f"amplitude spectrum of {CHANNEL_TEXT[channel]} ({float(ds.attrs['transient']):g} s ≤ t < {float(ds.attrs['duration']):g} s, "
                  f"resolution {resolution:.3g} Hz): {describe(ds, params)}", fontsize=10)
     if location == "crank_rod":
         fig.text(0.01, 0.005, CRANK_ROD_NOTE, fontsize=7.5, style="italic")

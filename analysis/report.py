@@ -131,7 +131,7 @@ def render_metrics(ds, cases, outdir, index, dpi):
                 index.note(f"{metric}: not shown ({e}).")
                 continue
             index.figure(out, f"{metric} ({figures.unit_text(ds, metric)}) of the bearing cases {shape}, "
-                              "t ≥ transient; facets: the other grid axes; blank: failed or not run.")
+                              "transient ≤ t < duration; facets: the other grid axes; blank: failed or not run.")
 
 
 def render_group(ds, params, counts, outdir, index, channels, dpi):
@@ -186,7 +186,7 @@ def summary(ds, cases):
         f"- grid axes: {', '.join(grid_axes(ds)) or 'none (explicit cases)'}",
         f"- cases: {ds.sizes['case']} ({int((status == 1).sum())} ok, {int((status == 2).sum())} failed, "
         f"{ideal} ideal); {cases.size} successful bearing cases shown",
-        f"- analysis window t ≥ {float(ds.attrs['transient']):g} s of {float(ds['time'].values[-1]):g} s, "
+        f"- analysis window {float(ds.attrs['transient']):g} s ≤ t < {float(ds['time'].values[-1]):g} s, "
         f"sample rate {float(ds.attrs['sample_rate']):g} Hz",
         "",
     ]

@@ -9,6 +9,7 @@ Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
 
+import math
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -84,9 +85,15 @@ def select_cases(ds, **params):
 
 
 def analysis_window(ds):
-    """Boolean mask over `time`: the samples at t >= the study's transient (s),
-    the window the stored metrics and spectra use."""
-    return ds["time"].values >= float(ds.attrs["transient"])
+    """Boolean mask over `time`: the samples at transient <= t < duration (s), the
+    window the stored metrics and spectra use. It is half-open (the last sample, at
+    t = duration, is left out) so that a window of whole crank revolutions holds
+    each crank phase once; its first sample is the first at or after the transient
+    (to within 1e-9 of a sample interval), found by index as studyrun does."""
+    n = ds.sizes["time"]
+    start = max(0, math.ceil(float(ds.attrs["transient"]) * float(ds.attrs["sample_rate"]) - 1e-9))
+    k = np.arange(n)
+    return (k >= start) & (k < n - 1)
 
 
 def _ideal_joint_force(ds, refs):

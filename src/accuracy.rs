@@ -12,7 +12,7 @@
 //! largest and the RMS difference from the reference, relative to the reference's
 //! range, over `[0, horizon]` only — past it pointwise errors measure chaos, not the
 //! integrator. **Metric error**: the relative error of the vibration metric a user
-//! reads (RMS deviation from the ideal mechanism over `t ≥ transient`, a statistic
+//! reads (RMS deviation from the ideal mechanism over `transient ≤ t < duration`, a statistic
 //! that stays meaningful past the horizon), next to the reference's own metric
 //! uncertainty (the 1e-10 run's metric against the 1e-11 run's).
 //!
@@ -164,8 +164,8 @@ pub fn reference(
     let reference = simulate(params, &SolverSettings::new(REFERENCE), &study.sampling)?;
     let check = simulate(params, &SolverSettings::new(CHECK), &study.sampling)?;
     let (m_ref, m_chk) = (
-        vibration_metrics(&reference, ideal, study.transient),
-        vibration_metrics(&check, ideal, study.transient),
+        vibration_metrics(&reference, ideal, study.analysis_window()),
+        vibration_metrics(&check, ideal, study.analysis_window()),
     );
     let (a, b) = (
         reference.channel("slider_acceleration").expect("channel"),
@@ -222,7 +222,7 @@ pub fn measure(
             return m;
         }
     };
-    let metrics = vibration_metrics(&out, ideal, study.transient);
+    let metrics = vibration_metrics(&out, ideal, study.analysis_window());
     let n = r
         .reference
         .times

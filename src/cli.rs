@@ -258,7 +258,7 @@ fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
         println!("{}", line.join("\t"));
     }
     let n_time = study.sampling.len() as f64;
-    let n_freq = (study.sampling.len() - run::window_start(study)) as f64 / 2.0 + 1.0;
+    let n_freq = (study.analysis_window().len() / 2 + 1) as f64;
     let width = if study.float32 { 4.0 } else { 8.0 };
     let raw = rows.len() as f64
         * (CHANNELS.len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)

@@ -1,5 +1,8 @@
 //! Vibration metrics (MODEL.md §6): how far a bearing case departs from the ideal
-//! mechanism at the same speed and sample times, after the initial transient.
+//! mechanism at the same speed and sample times, over an analysed window of samples
+//! after the initial transient ([`crate::simulate::Sampling::analysis_window`]).
+
+use std::ops::Range;
 
 use crate::mechanism::Location;
 use crate::simulate::CaseOutput;
@@ -17,22 +20,20 @@ pub struct Deviation {
 }
 
 impl Deviation {
-    /// Deviation of `case` from `reference` over the samples with `times[k] >= t_from` (s).
-    /// NaN samples in either series make the result NaN.
-    pub fn between(case: &[f64], reference: &[f64], times: &[f64], t_from: f64) -> Self {
+    /// Deviation of `case` from `reference`, sample by sample (the shorter length
+    /// counts). NaN samples in either series make the result NaN; no samples give NaN.
+    pub fn between(case: &[f64], reference: &[f64]) -> Self {
         let (mut sum, mut sum_ref, mut peak, mut n) = (0.0, 0.0, 0.0f64, 0usize);
-        for ((&a, &b), &t) in case.iter().zip(reference).zip(times) {
-            if t >= t_from {
-                let d = a - b;
-                sum += d * d;
-                sum_ref += b * b;
-                peak = if d.is_nan() {
-                    f64::NAN
-                } else {
-                    peak.max(d.abs())
-                };
-                n += 1;
-            }
+        for (&a, &b) in case.iter().zip(reference) {
+            let d = a - b;
+            sum += d * d;
+            sum_ref += b * b;
+            peak = if d.is_nan() {
+                f64::NAN
+            } else {
+                peak.max(d.abs())
+            };
+            n += 1;
         }
         if n == 0 {
             return Self {
@@ -72,33 +73,35 @@ pub fn default_window_start(rpm: f64) -> f64 {
 }
 
 /// Metrics of `case` (a bearing case) against `ideal` (same speed and sampling),
-/// over samples at `t >= t_from` (s).
-pub fn vibration_metrics(case: &CaseOutput, ideal: &CaseOutput, t_from: f64) -> VibrationMetrics {
-    fn window<'a>(o: &'a CaseOutput, name: &str, k0: usize) -> &'a [f64] {
-        &o.channel(name).expect("channel exists")[k0..]
+/// over the samples at the indices `window` (clamped to the series); only the
+/// window is read, and only its ideal force magnitudes are computed.
+pub fn vibration_metrics(
+    case: &CaseOutput,
+    ideal: &CaseOutput,
+    window: Range<usize>,
+) -> VibrationMetrics {
+    fn part<'a>(o: &'a CaseOutput, name: &str, window: &Range<usize>) -> &'a [f64] {
+        let series = o.channel(name).expect("channel exists");
+        let end = window.end.min(series.len());
+        &series[window.start.min(end)..end]
     }
-    // Sample times increase, so the window is a suffix: only it is read (and only
-    // its ideal force magnitudes are computed).
-    let k0 = case.times.partition_point(|&t| t < t_from);
     let joint = match case.location {
         Location::CrankRod => ("crank_rod_force_x", "crank_rod_force_y"),
         _ => ("crank_ground_force_x", "crank_ground_force_y"),
     };
-    let ideal_force: Vec<f64> = window(ideal, joint.0, k0)
+    let ideal_force: Vec<f64> = part(ideal, joint.0, &window)
         .iter()
-        .zip(window(ideal, joint.1, k0))
+        .zip(part(ideal, joint.1, &window))
         .map(|(x, y)| x.hypot(*y))
         .collect();
-    let times = &case.times[k0..];
-    let dev = |name: &str, reference: &[f64]| {
-        Deviation::between(window(case, name, k0), reference, times, t_from)
-    };
+    let dev =
+        |name: &str, reference: &[f64]| Deviation::between(part(case, name, &window), reference);
     VibrationMetrics {
         slider_acceleration: dev(
             "slider_acceleration",
-            window(ideal, "slider_acceleration", k0),
+            part(ideal, "slider_acceleration", &window),
         ),
-        crank_moment: dev("crank_moment", window(ideal, "crank_moment", k0)),
+        crank_moment: dev("crank_moment", part(ideal, "crank_moment", &window)),
         bearing_force: dev("bearing_force", &ideal_force),
     }
 }
@@ -108,8 +111,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn deviation_of_a_sine_offset() {
-        // case = ref + 0.5 sin: RMS of the difference is 0.5/√2, peak 0.5.
+    fn deviation_of_a_sine_offset_over_whole_periods() {
+        // case = ref + 0.5 sin(2π t), 1000 samples per period: over the half-open
+        // window of three whole periods (samples 1000..4000) the mean square of
+        // equally spaced samples of a sinusoid is exact, so the RMS of the
+        // difference is 0.5/√2 to roundoff; the peak is 0.5 (sampled at 1/4 period).
         let times: Vec<f64> = (0..=4000).map(|k| k as f64 / 1000.0).collect();
         let reference: Vec<f64> = times.iter().map(|t| 2.0 + t).collect();
         let case: Vec<f64> = times
@@ -117,8 +123,15 @@ mod tests {
             .zip(&reference)
             .map(|(t, r)| r + 0.5 * (2.0 * std::f64::consts::PI * t).sin())
             .collect();
-        let d = Deviation::between(&case, &reference, &times, 1.0);
-        assert!((d.rms - 0.5 / 2f64.sqrt()).abs() < 1e-3, "{}", d.rms);
-        assert!((d.peak - 0.5).abs() < 1e-6);
+        let d = Deviation::between(&case[1000..4000], &reference[1000..4000]);
+        assert!((d.rms - 0.5 / 2f64.sqrt()).abs() < 1e-12, "{}", d.rms);
+        assert!((d.peak - 0.5).abs() < 1e-12, "{}", d.peak);
+        // The closed window counts the phase at both ends: it is off by ~1/3000.
+        let closed = Deviation::between(&case[1000..=4000], &reference[1000..=4000]);
+        assert!(
+            (closed.rms - 0.5 / 2f64.sqrt()).abs() > 1e-5,
+            "{}",
+            closed.rms
+        );
     }
 }

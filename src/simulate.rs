@@ -2,6 +2,7 @@
 //! MODEL.md §3 at exact, uniformly spaced sample times. The ideal mechanism has no
 //! state and is sampled in closed form, without an integrator.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use crate::error::ParamError;
@@ -53,6 +54,18 @@ impl Sampling {
     /// Always false: a sampling has at least the sample at t = 0.
     pub fn is_empty(&self) -> bool {
         false
+    }
+
+    /// The analysed window after `transient` (s): the indices of the samples at
+    /// `transient ≤ t < duration`, from `ceil(transient × sample_rate)` (to within
+    /// 1e-9 of a sample) up to but excluding the last sample. The window is
+    /// half-open so that a window of whole crank revolutions holds each crank phase
+    /// once: its periodic Hann spectrum then puts the crank harmonics on bins, and
+    /// its mean square is the revolution's, with no end sample counted twice.
+    pub fn analysis_window(&self, transient: f64) -> Range<usize> {
+        let last = self.len() - 1;
+        let start = (transient * self.sample_rate - 1e-9).ceil().max(0.0) as usize;
+        start.min(last)..last
     }
 
     /// The sample times (s), computed as `k / sample_rate`, never accumulated.
@@ -238,4 +251,28 @@ pub fn simulate(
         stats,
         wall_time: start.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analysis_window_is_half_open_from_the_transient() {
+        let s = Sampling {
+            duration: 0.4,
+            sample_rate: 50_000.0,
+        };
+        assert_eq!(s.len(), 20_001);
+        // One revolution at 300 rpm: 10 000 samples, the one at t = 0.4 s left out.
+        assert_eq!(s.analysis_window(0.2), 10_000..20_000);
+        assert_eq!(s.analysis_window(0.0), 0..20_000);
+        // A transient between samples starts at the next one; one within 1e-9 of a
+        // sample (here 0.2 s written as 0.1 + 0.1) starts on it.
+        assert_eq!(s.analysis_window(0.200_01).start, 10_001);
+        assert_eq!(s.analysis_window(0.1 + 0.1).start, 10_000);
+        // Nothing left: an empty window, never one past the end.
+        assert!(s.analysis_window(0.4).is_empty());
+        assert!(s.analysis_window(1.0).is_empty());
+    }
 }

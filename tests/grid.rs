@@ -287,6 +287,21 @@ fn invalid_grids_are_refused_with_place_field_and_reason() {
             "spectra:\n  channels: [speed]\ngrid:\n  rpm: [300]\n",
             &["grid.yaml:5:", "spectra.channels[0]", "unknown channel"],
         ),
+        // the analysed window transient <= t < duration needs 2 of the 101 samples
+        (
+            "transient: \"0.1 s\"\ngrid:\n  rpm: [300]\n",
+            &["grid.yaml:4:", "transient", "below duration = 0.1 s"],
+        ),
+        (
+            "transient: \"0.099 s\"\ngrid:\n  rpm: [300]\n",
+            &[
+                "grid.yaml:4:",
+                "transient",
+                "leaves 1 sample(s)",
+                "at least 2",
+                "at most 0.098 s",
+            ],
+        ),
     ];
     for (tail, wants) in cases {
         let msg = refused(&format!("{base}{tail}"));

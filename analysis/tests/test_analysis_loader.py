@@ -72,9 +72,12 @@ def rms(x):
 
 
 def test_slider_acceleration_metric_recomputed_from_the_series(smoke):
-    """RMS of slider_acceleration minus its reference over t >= transient equals the stored metric."""
+    """RMS of slider_acceleration minus its reference over transient <= t < duration equals the stored metric."""
     window = analysis_window(smoke)
-    assert window.sum() == smoke.sizes["time"] - 200  # transient 0.01 s at 20 kHz
+    # transient 0.01 s at 20 kHz: samples 200 .. 999 of 0 .. 1000 (t = 0.05 s left out)
+    assert window.sum() == smoke.sizes["time"] - 201
+    assert np.flatnonzero(window)[[0, -1]].tolist() == [200, smoke.sizes["time"] - 2]
+    assert smoke.sizes["frequency"] == window.sum() // 2 + 1
     ref = reference_for(smoke, ["slider_acceleration"])["slider_acceleration"].values
     dev = smoke["slider_acceleration"].values - ref
     stored = smoke["slider_acceleration_rms_deviation"].values

@@ -96,13 +96,6 @@ pub struct CaseCost {
     pub analysis: f64,
 }
 
-/// Index of the first sample at or after `transient` (s).
-pub fn window_start(study: &Study) -> usize {
-    (study.transient * study.sampling.sample_rate - 1e-9)
-        .ceil()
-        .max(0.0) as usize
-}
-
 /// Simulates `params` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed). Never fails: a failure
 /// becomes a [`Status::Failed`] result with its message.
@@ -140,18 +133,18 @@ pub fn run_case(
         Ok(out) => out,
         Err(e) => return failed(e.to_string(), cost),
     };
-    let k0 = window_start(study);
+    let window = study.analysis_window();
     let mut spectra = Vec::with_capacity(study.spectrum_channels.len());
     for ch in &study.spectrum_channels {
         let series = out.channel(ch).expect("spectrum channels are validated");
         let mut amp = vec![0.0; plan.bins()];
-        if let Err(e) = plan.amplitude(&series[k0..], &mut amp) {
+        if let Err(e) = plan.amplitude(&series[window.clone()], &mut amp) {
             return failed(e.to_string(), cost);
         }
         spectra.push(amp);
     }
-    let m = vibration_metrics(&out, reference, study.transient);
-    let window = |name: &str| &out.channel(name).expect("channel exists")[k0..];
+    let m = vibration_metrics(&out, reference, window.clone());
+    let window = |name: &str| &out.channel(name).expect("channel exists")[window.clone()];
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let mut metrics = Vec::with_capacity(n_metrics);

@@ -39,11 +39,12 @@ pub fn inspect(path: &Path) -> Result<String> {
     writeln!(out, "grid:     {axes}")?;
     writeln!(
         out,
-        "sampling: {} s at {} Hz ({} samples), transient {} s, {} frequency bins",
+        "sampling: {} s at {} Hz ({} samples); analysed {} s <= t < {} s, {} frequency bins",
         attr("duration"),
         attr("sample_rate"),
         l.times.len(),
         attr("transient"),
+        attr("duration"),
         l.frequencies.len()
     )?;
     writeln!(out, "solver:   {}", attr("solver"))?;

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 
-use super::case::{metric_specs, reference_specs, window_start};
+use super::case::{metric_specs, reference_specs};
 use super::journal::fnv1a;
 use super::Shard;
 use crate::output::spectrum::frequencies;
@@ -42,8 +42,7 @@ impl StudyFingerprint {
 /// The layout of the file for the cases at `rows` (indices into `study.cases`).
 pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
     let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
-    let k0 = window_start(study);
-    let n_window = study.sampling.len() - k0;
+    let n_window = study.analysis_window().len();
     let mut parameters: Vec<Param> = PARAMETERS
         .iter()
         .map(|p| Param {
@@ -89,6 +88,12 @@ pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
         ("duration".to_string(), study.sampling.duration.into()),
         ("sample_rate".to_string(), study.sampling.sample_rate.into()),
         ("transient".to_string(), study.transient.into()),
+        (
+            "analysis_window".to_string(),
+            "transient <= time < duration (the sample at time = duration left out): \
+             the samples the metrics and spectra use"
+                .into(),
+        ),
         ("spectrum_window".to_string(), study.window.clone().into()),
         (
             "spectrum_normalisation".to_string(),

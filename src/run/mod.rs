@@ -18,7 +18,7 @@ mod merge;
 mod progress;
 mod stats;
 
-pub use case::{metric_specs, run_case, window_start, CaseCost, CaseResult, REFERENCE_CHANNELS};
+pub use case::{metric_specs, run_case, CaseCost, CaseResult, REFERENCE_CHANNELS};
 pub use inspect::inspect;
 pub use journal::{
     fnv1a, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
@@ -228,8 +228,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.max(1))
         .build()?;
-    let k0 = window_start(study);
-    let n_window = layout.times.len() - k0;
+    let n_window = study.analysis_window().len();
     let window = window_of(study);
     let storage = layout.storage;
     // At most two records per worker wait for the writer: memory stays bounded.

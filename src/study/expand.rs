@@ -346,6 +346,23 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
             x
         }
     };
+    // Spectra (Hann) and metrics need two samples in `transient ≤ t < duration`.
+    let analysed = sampling.analysis_window(transient).len();
+    if analysed < 2 {
+        let last_sample = sampling.len() - 1;
+        return Err(ctx.err(
+            file.transient.as_ref().map(|v| at(&v.referenced)),
+            "transient",
+            format!(
+                "{transient} s leaves {analysed} sample(s) in the analysed window \
+                 transient <= t < duration = {} s at {} Hz; at least 2 are needed \
+                 (a transient of at most {} s, or a longer duration)",
+                sampling.duration,
+                sampling.sample_rate,
+                last_sample.saturating_sub(2) as f64 / sampling.sample_rate
+            ),
+        ));
+    }
 
     let spectra = file.spectra.unwrap_or_default();
     let window = match &spectra.window {

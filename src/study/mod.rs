@@ -15,6 +15,7 @@ pub mod params;
 pub mod units;
 
 use std::fmt;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::mechanism::CaseParams;
@@ -83,7 +84,8 @@ pub struct Study {
     pub solver: SolverSettings,
     /// Which effects are simulated.
     pub effects: Effects,
-    /// Start of the window analysed by metrics and spectra (s).
+    /// Start of the window analysed by metrics and spectra (s); the window is
+    /// `transient ≤ t < duration` ([`Study::analysis_window`]).
     pub transient: f64,
     /// Spectrum window name: `hann` or `rectangular`.
     pub window: String,
@@ -116,6 +118,12 @@ impl Study {
     /// Parses and validates grid-file `text` (`path` is used in messages only).
     pub fn from_yaml(text: &str, path: &Path) -> Result<Self, StudyError> {
         expand::build(text, path)
+    }
+
+    /// Indices of the samples the metrics and spectra analyse, `transient ≤ t <
+    /// duration` ([`Sampling::analysis_window`]).
+    pub fn analysis_window(&self) -> Range<usize> {
+        self.sampling.analysis_window(self.transient)
     }
 
     /// The ids of shard `k` of `n` (1-based `k`): cases whose id ≡ k − 1 (mod n),
