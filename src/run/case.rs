@@ -144,7 +144,7 @@ pub fn run_case(
         spectra.push(amp);
     }
     let m = vibration_metrics(&out, reference, window.clone());
-    let window = |name: &str| &out.channel(name).expect("channel exists")[window.clone()];
+    let analysed = |name: &str| &out.channel(name).expect("channel exists")[window.clone()];
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let mut metrics = Vec::with_capacity(n_metrics);
@@ -156,9 +156,9 @@ pub fn run_case(
         } = d;
         metrics.extend([rms, peak, reference_rms]);
     }
-    let loaded = window("loaded_balls");
+    let loaded = analysed("loaded_balls");
     metrics.extend([
-        max(window("bearing_force")),
+        max(analysed("bearing_force")),
         min(loaded),
         max(loaded),
         out.stats.steps as f64,
