@@ -88,6 +88,19 @@ fn weighted_sum<W>(h: f64, w: W, k: &[f64], n: usize, base: Option<&[f64]>, out:
 where
     W: Iterator<Item = f64> + Clone,
 {
+    // A state of exactly four components (the production model's): the slopes as
+    // rows of four, with no index arithmetic or bounds checks per term.
+    if let (Ok(out), LANES) = (<&mut [f64; LANES]>::try_from(&mut *out), n) {
+        let rows = k.chunks_exact(LANES);
+        let mut acc = [-0.0; LANES];
+        for (wj, row) in w.zip(rows) {
+            for (a, kj) in acc.iter_mut().zip(row) {
+                *a += wj * kj;
+            }
+        }
+        finish(h, acc, base, 0, out);
+        return;
+    }
     let mut m0 = 0;
     let mut chunks = out.chunks_exact_mut(LANES);
     for chunk in &mut chunks {
@@ -122,6 +135,12 @@ fn components<const L: usize, W: Iterator<Item = f64>>(
             *a += wj * kj;
         }
     }
+    finish(h, acc, base, m0, out);
+}
+
+/// `out[l] = base[m0 + l] + h acc[l]` (`base` absent: `h acc[l]`).
+#[inline(always)]
+fn finish<const L: usize>(h: f64, acc: [f64; L], base: Option<&[f64]>, m0: usize, out: &mut [f64]) {
     for (l, (o, a)) in out.iter_mut().zip(acc).enumerate() {
         *o = match base {
             Some(b) => b[m0 + l] + h * a,
@@ -596,7 +615,8 @@ mod tests {
     use super::*;
 
     /// The side-by-side sums equal the plain per-component sums bit for bit, for state
-    /// sizes with and without a remainder after the groups of four, with and without a
+    /// sizes with and without a remainder after the groups of four (and of exactly four,
+    /// which has its own path), with and without a
     /// base, and for every stage count of DOP853 and its dense output.
     #[test]
     fn weighted_sums_equal_the_plain_sums_bit_for_bit() {
