@@ -279,13 +279,25 @@ fn trajectories_agree_through_the_impacting_start() {
     }
 }
 
-fn kernel_params(balls: usize, damping: f64, model: DampingModel) -> BearingParams {
+/// A bearing with the first `harmonics.0` of two waviness harmonics on the inner race
+/// and `harmonics.1` on the outer (the kernel computes two harmonics in all inside
+/// its ball loop, other counts through stored offsets).
+fn kernel_params(
+    balls: usize,
+    damping: f64,
+    model: DampingModel,
+    harmonics: (usize, usize),
+) -> BearingParams {
+    let first = |mut w: RaceWaviness, n: usize| {
+        w.harmonics.truncate(n);
+        w
+    };
     BearingParams {
         ball_count: balls,
         damping,
         damping_model: model,
-        inner_waviness: waves(35, 4e-6, 0.3),
-        outer_waviness: waves(12, 2e-6, 2.0),
+        inner_waviness: first(waves(35, 4e-6, 0.3), harmonics.0),
+        outer_waviness: first(waves(12, 2e-6, 2.0), harmonics.1),
         ..BearingParams::default()
     }
 }
@@ -302,9 +314,10 @@ proptest! {
         angle in -10.0f64..10.0,
         v in prop::array::uniform2(-0.5f64..0.5),
         turns in prop::array::uniform2(-40.0f64..40.0),
+        harmonics in (0usize..=2, 0usize..=2),
     ) {
         let model = if two_sided { DampingModel::TwoSided } else { DampingModel::CompressionOnly };
-        let params = kernel_params(balls, damping, model);
+        let params = kernel_params(balls, damping, model, harmonics);
         let mut set = BallSet::new(&params);
         let state: ContactState = CageWeights::of(&params)
             .contact_state([r * angle.cos(), r * angle.sin()], v, turns[0], turns[1]);
@@ -365,9 +378,10 @@ proptest! {
         angle in prop::array::uniform2(-10.0f64..10.0),
         v in prop::array::uniform2(-0.5f64..0.5),
         turns in prop::array::uniform2(-40.0f64..40.0),
+        harmonics in (0usize..=2, 0usize..=2),
     ) {
         let model = if two_sided { DampingModel::TwoSided } else { DampingModel::CompressionOnly };
-        let params = kernel_params(balls, damping, model);
+        let params = kernel_params(balls, damping, model, harmonics);
         let mut set = BallSet::new(&params);
         let weights = CageWeights::of(&params);
         let at = |i: usize| weights.contact_state(

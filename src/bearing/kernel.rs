@@ -364,7 +364,8 @@ pub struct BallSet {
     base: Vec<F64x4>,
     /// Harmonics of both races with nonzero amplitude.
     waves: Vec<Wave>,
-    /// Scratch: `base + Σ waviness` per ball for the current evaluation (m).
+    /// Scratch: `base + Σ waviness` per ball for the current evaluation (m), for
+    /// counts of harmonics other than two ([`BallSet::sum`]).
     offset: Vec<F64x4>,
     /// Scratch: the cage angle, each wave's phase `N ψ + φ`, then a caller's angle
     /// (rad), padded to a multiple of [`LANES`]; their sines and cosines.
@@ -497,13 +498,15 @@ impl BallSet {
             None => (0.0, 1.0),
         };
         let sum = match regime {
-            Some(r) => self.sum::<V, _>(
-                s,
-                Held {
-                    loaded: &r.loaded,
-                    acting: &r.acting,
-                },
-            ),
+            Some(r) => {
+                // Cut to the ball vectors, so the loop's look-ups carry no bounds checks.
+                let n = self.dir_cos.len();
+                let held = Held {
+                    loaded: &r.loaded[..n],
+                    acting: &r.acting[..n],
+                };
+                self.sum::<V, _>(s, held)
+            }
             None => self.sum::<V, _>(s, Natural),
         };
         (sum, trig)
@@ -530,36 +533,58 @@ impl BallSet {
     }
 
     /// The kernel under load rule `rule`, once [`BallSet::prepare`] has run for `s`.
+    /// With the common two waviness harmonics (one per race) the balls' offsets are
+    /// computed inside the ball loop; with other counts [`fill_offsets`] stores them
+    /// first. Either way each offset is `(base + wave₁) + wave₂ …` in the same order.
     #[inline(always)]
-    fn sum<V: Lanes, R: LoadRule>(&self, s: &ContactState, rule: R) -> BallSum {
+    fn sum<V: Lanes, R: LoadRule>(&mut self, s: &ContactState, rule: R) -> BallSum {
+        let n = self.dir_cos.len();
+        let base = &self.base[..n];
+        match self.waves.as_slice() {
+            [] => self.sum_with::<V, R, _>(s, rule, Stored(base)),
+            [w1, w2] => {
+                let one = WaveLanes::<V>::new(w1, self.sines[1], self.cosines[1], n);
+                let two = WaveLanes::<V>::new(w2, self.sines[2], self.cosines[2], n);
+                self.sum_with::<V, R, _>(s, rule, TwoWaves { base, one, two })
+            }
+            waves => {
+                fill_offsets::<V>(
+                    &mut self.offset,
+                    &self.base,
+                    waves,
+                    (&self.sines[1..], &self.cosines[1..]),
+                );
+                self.sum_with::<V, R, _>(s, rule, Stored(&self.offset[..n]))
+            }
+        }
+    }
+
+    /// [`BallSet::sum`] with the balls' offsets from `offsets`.
+    #[inline(always)]
+    fn sum_with<V: Lanes, R: LoadRule, O: Offsets<V>>(
+        &self,
+        s: &ContactState,
+        rule: R,
+        offsets: O,
+    ) -> BallSum {
         let trig = (self.sines[0], self.cosines[0]);
         let k = self.stiffness;
         let balls = Balls {
             dir_cos: &self.dir_cos,
             dir_sin: &self.dir_sin,
-            offset: self.current_offsets(),
+            offsets,
         };
         match self.law {
-            Law::Undamped => sum_balls::<V, _, _>(balls, s, trig, k, Undamped, rule),
+            Law::Undamped => sum_balls::<V, _, _, _>(balls, s, trig, k, Undamped, rule),
             Law::CompressionOnly(c) => {
-                sum_balls::<V, _, _>(balls, s, trig, k, CompressionOnly(c), rule)
+                sum_balls::<V, _, _, _>(balls, s, trig, k, CompressionOnly(c), rule)
             }
-            Law::TwoSided(c) => sum_balls::<V, _, _>(balls, s, trig, k, TwoSided(c), rule),
-        }
-    }
-
-    /// The per-ball offsets of the evaluation [`BallSet::prepare`] set up (m).
-    fn current_offsets(&self) -> &[F64x4] {
-        if self.waves.is_empty() {
-            &self.base
-        } else {
-            &self.offset
+            Law::TwoSided(c) => sum_balls::<V, _, _, _>(balls, s, trig, k, TwoSided(c), rule),
         }
     }
 
     /// Computes the sines and cosines of the cage angle, the wave phases at `s` and
-    /// the caller's angle ([`LANES`] per `sin_cos`) and fills the per-ball offsets
-    /// when the set is wavy.
+    /// the caller's angle ([`LANES`] per `sin_cos`).
     ///
     /// The first `used` angles are needed. Two or fewer take the scalar `sin_cos`,
     /// which is cheaper than one [`sin_cos4`] for them.
@@ -593,14 +618,6 @@ impl BallSet {
                 sn.copy_from_slice(&vs);
                 cs.copy_from_slice(&vc);
             }
-        }
-        if !self.waves.is_empty() {
-            fill_offsets::<V>(
-                &mut self.offset,
-                &self.base,
-                &self.waves,
-                (&self.sines[1..], &self.cosines[1..]),
-            );
         }
     }
 
@@ -670,10 +687,70 @@ fn fill_offsets<V: Lanes>(
 
 /// The per-ball data of one evaluation: base directions and offsets (m).
 #[derive(Clone, Copy)]
-struct Balls<'a> {
+struct Balls<'a, O> {
     dir_cos: &'a [F64x4],
     dir_sin: &'a [F64x4],
-    offset: &'a [F64x4],
+    offsets: O,
+}
+
+/// Where the ball loop takes each ball vector's offset from. (A trait with methods
+/// inlined always rather than a closure: a closure that is not inlined would be
+/// compiled without the caller's target features.)
+trait Offsets<V: Lanes> {
+    /// The offsets `base + Σ waviness` of ball vector `i` (m).
+    fn at(&self, i: usize) -> V;
+}
+
+/// Offsets stored per ball vector (the base alone, or [`fill_offsets`]'s result).
+struct Stored<'a>(&'a [F64x4]);
+
+impl<V: Lanes> Offsets<V> for Stored<'_> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> V {
+        V::load(&self.0[i])
+    }
+}
+
+/// The base plus two harmonics, computed in the loop: `(base + wave₁) + wave₂`.
+struct TwoWaves<'a, V> {
+    base: &'a [F64x4],
+    one: WaveLanes<'a, V>,
+    two: WaveLanes<'a, V>,
+}
+
+impl<V: Lanes> Offsets<V> for TwoWaves<'_, V> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> V {
+        self.two.add(i, self.one.add(i, V::load(&self.base[i])))
+    }
+}
+
+/// One waviness harmonic's per-ball terms with its phase's sine and cosine as lanes:
+/// adds `Π sin(N α_r + x) = sin x · Π cos N α_r + cos x · Π sin N α_r` (m).
+struct WaveLanes<'a, V> {
+    sin_x: V,
+    cos_x: V,
+    cos_term: &'a [F64x4],
+    sin_term: &'a [F64x4],
+}
+
+impl<'a, V: Lanes> WaveLanes<'a, V> {
+    /// The terms of `wave` for `n` ball vectors, at phase sine `sin_x`, cosine `cos_x`.
+    #[inline(always)]
+    fn new(wave: &'a Wave, sin_x: f64, cos_x: f64, n: usize) -> Self {
+        Self {
+            sin_x: V::splat(sin_x),
+            cos_x: V::splat(cos_x),
+            cos_term: &wave.cos_term[..n],
+            sin_term: &wave.sin_term[..n],
+        }
+    }
+
+    /// `offset` plus this harmonic's height on ball vector `i` (m).
+    #[inline(always)]
+    fn add(&self, i: usize, offset: V) -> V {
+        offset + (self.sin_x * V::load(&self.cos_term[i]) + self.cos_x * V::load(&self.sin_term[i]))
+    }
 }
 
 /// The branch-free ball loop, [`LANES`] balls per iteration, with the cage angle's
@@ -681,8 +758,8 @@ struct Balls<'a> {
 /// `K δ^{3/2}` under the natural law, its smooth continuation under a held regime).
 /// Unloaded lanes take the square root of 0, which `sqrtpd` finishes early.
 #[inline(always)]
-fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule>(
-    balls: Balls<'_>,
+fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule, O: Offsets<V>>(
+    balls: Balls<'_, O>,
     s: &ContactState,
     (sc, cc): (f64, f64),
     stiffness: f64,
@@ -695,17 +772,13 @@ fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule>(
     let k = V::splat(stiffness);
     let (mut fx, mut fy, mut loaded) = (V::zero(), V::zero(), V::zero());
     let mut margin = V::splat(f64::INFINITY);
-    for (i, ((dc, ds), off)) in balls
-        .dir_cos
-        .iter()
-        .zip(balls.dir_sin)
-        .zip(balls.offset)
-        .enumerate()
-    {
-        let (dc, ds) = (V::load(dc), V::load(ds));
+    let n = balls.dir_cos.len();
+    let dir_sin = &balls.dir_sin[..n];
+    for (i, dc) in balls.dir_cos.iter().enumerate() {
+        let (dc, ds) = (V::load(dc), V::load(&dir_sin[i]));
         let nx = cc * dc - sc * ds;
         let ny = sc * dc + cc * ds;
-        let delta = ex * nx + ey * ny + V::load(off);
+        let delta = ex * nx + ey * ny + balls.offsets.at(i);
         let (mask, d) = rule.load(i, delta);
         let v_r = vx * nx + vy * ny;
         let elastic = k * d * d.abs().sqrt();
