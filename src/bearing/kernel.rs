@@ -590,13 +590,22 @@ impl BallSet {
     /// which is cheaper than one [`sin_cos4`] for them.
     #[inline(always)]
     fn prepare<V: Lanes>(&mut self, s: &ContactState, used: usize) {
-        self.angles[0] = s.cage;
-        for (a, w) in self.angles[1..].iter_mut().zip(&self.waves) {
+        let phase = |w: &Wave| {
             let psi = match w.race {
                 Race::Inner => s.psi_in,
                 Race::Outer => s.psi_out,
             };
-            *a = w.number * psi + w.phase;
+            w.number * psi + w.phase
+        };
+        self.angles[0] = s.cage;
+        match self.waves.as_slice() {
+            // The common case spelled out: a loop over two waves costs more than them.
+            [w1, w2] => (self.angles[1], self.angles[2]) = (phase(w1), phase(w2)),
+            waves => {
+                for (a, w) in self.angles[1..].iter_mut().zip(waves) {
+                    *a = phase(w);
+                }
+            }
         }
         if used <= 2 {
             for ((a, sn), cs) in self.angles[..used]
@@ -607,12 +616,13 @@ impl BallSet {
                 (*sn, *cs) = a.sin_cos();
             }
         } else {
-            for ((a, sn), cs) in self
-                .angles
+            let groups = used.div_ceil(LANES) * LANES;
+            let sines = self.sines[..groups].chunks_exact_mut(LANES);
+            let cosines = self.cosines[..groups].chunks_exact_mut(LANES);
+            for ((a, sn), cs) in self.angles[..groups]
                 .chunks_exact(LANES)
-                .zip(self.sines.chunks_exact_mut(LANES))
-                .zip(self.cosines.chunks_exact_mut(LANES))
-                .take(used.div_ceil(LANES))
+                .zip(sines)
+                .zip(cosines)
             {
                 let (vs, vc) = sin_cos4::<V>([a[0], a[1], a[2], a[3]]);
                 sn.copy_from_slice(&vs);

@@ -245,7 +245,10 @@ impl MinimalSliderCrank {
                 [0.0; 2],
             ));
         };
-        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let &[ex, ey, vx, vy] = &y[..4] else {
+            unreachable!("a bearing case has 4 state variables")
+        };
+        let (e, ed) = ([ex, ey], [vx, vy]);
         let regime = held.then_some(&w.regime);
         let (kin, sum) = match self.location {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
