@@ -53,19 +53,69 @@ pub const CHECK: Method = Method::DormandPrince {
 /// 1e-9 (below the check run's 1e-10) and SDIRK4 at 1e-3 … 1e-8 with `atol = 1e-4 rtol` (state units: m, m/s);
 /// RK4 over steps including the paper's 20 µs.
 pub fn default_ladder() -> Vec<Method> {
-    let tolerances =
-        |range: std::ops::RangeInclusive<i32>| range.map(|k| (10f64.powi(-k), 10f64.powi(-k - 4)));
+    let decades = |range: std::ops::RangeInclusive<i32>| range.map(|k| 10f64.powi(-k));
+    let mut ladder = adaptive_ladder(&decades(3..=9).collect::<Vec<_>>(), false);
+    ladder.extend(decades(3..=8).map(sdirk4));
+    ladder.extend(RK4_STEPS.map(|step| Method::Rk4 { step }));
+    ladder
+}
+
+/// A ladder at the caller's relative tolerances `rtols` (each checked by
+/// [`check_rtol`]): every adaptive method (the three explicit pairs and SDIRK4) at
+/// each of them with `atol = 1e-4 rtol`, and RK4 over the default ladder's steps. For
+/// a finer look at the trade-off than the default's decades (`studyrun accuracy
+/// --rtols`).
+pub fn ladder_at(rtols: &[f64]) -> Vec<Method> {
+    let mut ladder = adaptive_ladder(rtols, true);
+    ladder.extend(RK4_STEPS.map(|step| Method::Rk4 { step }));
+    ladder
+}
+
+/// RK4's steps in the ladders (s), the paper's 20 µs among them.
+const RK4_STEPS: [f64; 5] = [80e-6, 40e-6, 20e-6, 10e-6, 5e-6];
+
+/// The explicit pairs at each of `rtols` (`atol = 1e-4 rtol`), then SDIRK4 at each of
+/// them if `with_sdirk4`.
+fn adaptive_ladder(rtols: &[f64], with_sdirk4: bool) -> Vec<Method> {
     let mut ladder = Vec::new();
     for pair in [
         |rtol, atol| Method::DormandPrince { rtol, atol },
         |rtol, atol| Method::Tsit5 { rtol, atol },
         |rtol, atol| Method::Dop853 { rtol, atol },
     ] {
-        ladder.extend(tolerances(3..=9).map(|(rtol, atol)| pair(rtol, atol)));
+        ladder.extend(rtols.iter().map(|&rtol| pair(rtol, LADDER_ATOL * rtol)));
     }
-    ladder.extend(tolerances(3..=8).map(|(rtol, atol)| Method::Sdirk4 { rtol, atol }));
-    ladder.extend([80e-6, 40e-6, 20e-6, 10e-6, 5e-6].map(|step| Method::Rk4 { step }));
+    if with_sdirk4 {
+        ladder.extend(rtols.iter().copied().map(sdirk4));
+    }
     ladder
+}
+
+/// SDIRK4 at `rtol` with the ladder's `atol`.
+fn sdirk4(rtol: f64) -> Method {
+    Method::Sdirk4 {
+        rtol,
+        atol: LADDER_ATOL * rtol,
+    }
+}
+
+/// `atol / rtol` in the ladders (m and m/s per unit of rtol).
+const LADDER_ATOL: f64 = 1e-4;
+
+/// Whether `rtol` can be measured against the reference: finite, below 1 and above the
+/// check run's rtol (the reference is validated only to there).
+pub fn check_rtol(rtol: f64) -> Result<(), String> {
+    let floor = match CHECK {
+        Method::DormandPrince { rtol, .. } => rtol,
+        _ => unreachable!("the check run is DOPRI5"),
+    };
+    if rtol.is_finite() && rtol > floor && rtol < 1.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "rtol {rtol:e} is outside what the accuracy study can judge: it must be above {floor:e} (the reference's check run) and below 1"
+        ))
+    }
 }
 
 /// The integrators' names, as [`describe`] gives them and the grid file's

@@ -289,6 +289,54 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
+/// `accuracy --rtols` replaces the ladder's decades for the adaptive methods; a value
+/// the reference cannot judge is a usage error that names the flag and the range.
+#[test]
+fn accuracy_takes_the_callers_tolerances() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "acc.yaml",
+        "name: acc\nduration: 0.01\nsample_rate: 10000\ntransient: \"0.005 s\"\nlocation: crank_ground\nrpm: 300\ngrid:\n  ball_count: [9]\n",
+    );
+    let args = [
+        "accuracy",
+        "acc.yaml",
+        "--methods",
+        "dop853",
+        "-o",
+        "acc.h5",
+    ];
+    let out = studyrun(dir.path(), &[&args[..], &["--rtols", "1e-4,3e-5"]].concat());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    // Each setting in the case's table and in the summary; no decade of the default.
+    for (setting, rows) in [("1e-4", 2), ("3e-5", 2), ("1e-3", 0), ("1e-8", 0)] {
+        let n = stdout.matches(&format!("| dop853 | {setting} |")).count();
+        assert_eq!(n, rows, "{setting}: {stdout}");
+    }
+    let file = StudyReader::open(dir.path().join("acc.h5")).unwrap();
+    assert_eq!(file.layout().case_ids.len(), 2);
+    for bad in ["1e-12", "0", "2", "abc"] {
+        let out = studyrun(
+            dir.path(),
+            &[&args[..], &["--force", "--rtols", bad]].concat(),
+        );
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("--rtols") && stderr.contains(bad),
+            "{bad}: {stderr}"
+        );
+        if bad != "abc" {
+            assert!(
+                stderr.contains("above 1e-10") && stderr.contains("below 1"),
+                "{stderr}"
+            );
+        }
+    }
+}
+
 #[test]
 fn accuracy_measures_only_the_chosen_methods() {
     let dir = tempfile::tempdir().unwrap();
