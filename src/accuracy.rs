@@ -43,9 +43,11 @@ pub const REFERENCE: Method = Method::DormandPrince {
     rtol: 1e-11,
     atol: 1e-15,
 };
+/// The relative tolerance of [`CHECK`]: the tightest the accuracy study can judge.
+const CHECK_RTOL: f64 = 1e-10;
 /// The setting that validates the reference.
 pub const CHECK: Method = Method::DormandPrince {
-    rtol: 1e-10,
+    rtol: CHECK_RTOL,
     atol: 1e-14,
 };
 
@@ -53,11 +55,12 @@ pub const CHECK: Method = Method::DormandPrince {
 /// 1e-9 (below the check run's 1e-10) and SDIRK4 at 1e-3 … 1e-8 with `atol = 1e-4 rtol` (state units: m, m/s);
 /// RK4 over steps including the paper's 20 µs.
 pub fn default_ladder() -> Vec<Method> {
-    let decades = |range: std::ops::RangeInclusive<i32>| range.map(|k| 10f64.powi(-k));
-    let mut ladder = adaptive_ladder(&decades(3..=9).collect::<Vec<_>>(), false);
-    ladder.extend(decades(3..=8).map(sdirk4));
-    ladder.extend(RK4_STEPS.map(|step| Method::Rk4 { step }));
-    ladder
+    let decades = |range: std::ops::RangeInclusive<i32>| {
+        range
+            .map(|k| (10f64.powi(-k), 10f64.powi(-k - 4)))
+            .collect::<Vec<_>>()
+    };
+    ladder(&decades(3..=9), &decades(3..=8))
 }
 
 /// A ladder at the caller's relative tolerances `rtols` (each checked by
@@ -66,54 +69,38 @@ pub fn default_ladder() -> Vec<Method> {
 /// a finer look at the trade-off than the default's decades (`studyrun accuracy
 /// --rtols`).
 pub fn ladder_at(rtols: &[f64]) -> Vec<Method> {
-    let mut ladder = adaptive_ladder(rtols, true);
-    ladder.extend(RK4_STEPS.map(|step| Method::Rk4 { step }));
-    ladder
+    let tolerances: Vec<(f64, f64)> = rtols.iter().map(|&r| (r, 1e-4 * r)).collect();
+    ladder(&tolerances, &tolerances)
 }
 
-/// RK4's steps in the ladders (s), the paper's 20 µs among them.
-const RK4_STEPS: [f64; 5] = [80e-6, 40e-6, 20e-6, 10e-6, 5e-6];
-
-/// The explicit pairs at each of `rtols` (`atol = 1e-4 rtol`), then SDIRK4 at each of
-/// them if `with_sdirk4`.
-fn adaptive_ladder(rtols: &[f64], with_sdirk4: bool) -> Vec<Method> {
+/// The explicit pairs at each `(rtol, atol)` of `pairs`, SDIRK4 at each of `sdirk4`,
+/// RK4 over steps including the paper's 20 µs.
+fn ladder(pairs: &[(f64, f64)], sdirk4: &[(f64, f64)]) -> Vec<Method> {
     let mut ladder = Vec::new();
     for pair in [
         |rtol, atol| Method::DormandPrince { rtol, atol },
         |rtol, atol| Method::Tsit5 { rtol, atol },
         |rtol, atol| Method::Dop853 { rtol, atol },
     ] {
-        ladder.extend(rtols.iter().map(|&rtol| pair(rtol, LADDER_ATOL * rtol)));
+        ladder.extend(pairs.iter().map(|&(rtol, atol)| pair(rtol, atol)));
     }
-    if with_sdirk4 {
-        ladder.extend(rtols.iter().copied().map(sdirk4));
-    }
+    ladder.extend(
+        sdirk4
+            .iter()
+            .map(|&(rtol, atol)| Method::Sdirk4 { rtol, atol }),
+    );
+    ladder.extend([80e-6, 40e-6, 20e-6, 10e-6, 5e-6].map(|step| Method::Rk4 { step }));
     ladder
 }
-
-/// SDIRK4 at `rtol` with the ladder's `atol`.
-fn sdirk4(rtol: f64) -> Method {
-    Method::Sdirk4 {
-        rtol,
-        atol: LADDER_ATOL * rtol,
-    }
-}
-
-/// `atol / rtol` in the ladders (m and m/s per unit of rtol).
-const LADDER_ATOL: f64 = 1e-4;
 
 /// Whether `rtol` can be measured against the reference: finite, below 1 and above the
 /// check run's rtol (the reference is validated only to there).
 pub fn check_rtol(rtol: f64) -> Result<(), String> {
-    let floor = match CHECK {
-        Method::DormandPrince { rtol, .. } => rtol,
-        _ => unreachable!("the check run is DOPRI5"),
-    };
-    if rtol.is_finite() && rtol > floor && rtol < 1.0 {
+    if rtol.is_finite() && rtol > CHECK_RTOL && rtol < 1.0 {
         Ok(())
     } else {
         Err(format!(
-            "rtol {rtol:e} is outside what the accuracy study can judge: it must be above {floor:e} (the reference's check run) and below 1"
+            "rtol {rtol:e} is outside what the accuracy study can judge: it must be above {CHECK_RTOL:e} (the reference's check run) and below 1"
         ))
     }
 }

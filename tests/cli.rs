@@ -289,38 +289,56 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
+/// Runs `studyrun accuracy` with `args` on a 9-ball, 10 ms grid at `location` and
+/// `rpm` written into `dir` (output `acc.h5`), and checks that it succeeds, that each
+/// `(row start, count)` of `rows` begins that many table lines of stdout (the case's
+/// table and the summary), and that the file holds `settings` rows.
+fn accuracy_rows(
+    dir: &Path,
+    (location, rpm): (&str, u32),
+    args: &[&str],
+    rows: &[(&str, usize)],
+    settings: usize,
+) {
+    write(
+        dir,
+        "acc.yaml",
+        &format!("name: acc\nduration: 0.01\nsample_rate: 10000\ntransient: \"0.005 s\"\nlocation: {location}\nrpm: {rpm}\ngrid:\n  ball_count: [9]\n"),
+    );
+    let out = studyrun(
+        dir,
+        &[&["accuracy", "acc.yaml", "-o", "acc.h5"], args].concat(),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    for (start, count) in rows {
+        let n = stdout.matches(&format!("| {start} |")).count();
+        assert_eq!(n, *count, "{start}: {stdout}");
+    }
+    let file = StudyReader::open(dir.join("acc.h5")).unwrap();
+    assert_eq!(file.layout().case_ids.len(), settings);
+}
+
 /// `accuracy --rtols` replaces the ladder's decades for the adaptive methods; a value
 /// the reference cannot judge is a usage error that names the flag and the range.
 #[test]
 fn accuracy_takes_the_callers_tolerances() {
     let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "acc.yaml",
-        "name: acc\nduration: 0.01\nsample_rate: 10000\ntransient: \"0.005 s\"\nlocation: crank_ground\nrpm: 300\ngrid:\n  ball_count: [9]\n",
-    );
-    let args = [
-        "accuracy",
-        "acc.yaml",
-        "--methods",
-        "dop853",
-        "-o",
-        "acc.h5",
-    ];
-    let out = studyrun(dir.path(), &[&args[..], &["--rtols", "1e-4,3e-5"]].concat());
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let args = ["--methods", "dop853", "--rtols", "1e-4,3e-5"];
     // Each setting in the case's table and in the summary; no decade of the default.
-    for (setting, rows) in [("1e-4", 2), ("3e-5", 2), ("1e-3", 0), ("1e-8", 0)] {
-        let n = stdout.matches(&format!("| dop853 | {setting} |")).count();
-        assert_eq!(n, rows, "{setting}: {stdout}");
-    }
-    let file = StudyReader::open(dir.path().join("acc.h5")).unwrap();
-    assert_eq!(file.layout().case_ids.len(), 2);
+    let rows = [
+        ("dop853 | 1e-4", 2),
+        ("dop853 | 3e-5", 2),
+        ("dop853 | 1e-3", 0),
+        ("dop853 | 1e-8", 0),
+    ];
+    accuracy_rows(dir.path(), ("crank_ground", 300), &args, &rows, 2);
     for bad in ["1e-12", "0", "2", "abc"] {
         let out = studyrun(
             dir.path(),
-            &[&args[..], &["--force", "--rtols", bad]].concat(),
+            &[
+                "accuracy", "acc.yaml", "-o", "acc.h5", "--force", "--rtols", bad,
+            ],
         );
         assert_eq!(out.status.code(), Some(2), "{bad}");
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -340,31 +358,10 @@ fn accuracy_takes_the_callers_tolerances() {
 #[test]
 fn accuracy_measures_only_the_chosen_methods() {
     let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "acc.yaml",
-        "name: acc\nduration: 0.01\nsample_rate: 10000\ntransient: \"0.005 s\"\nlocation: crank_rod\nrpm: 600\ngrid:\n  ball_count: [9]\n",
-    );
-    let out = studyrun(
-        dir.path(),
-        &[
-            "accuracy",
-            "acc.yaml",
-            "--methods",
-            "tsit5,dop853",
-            "-o",
-            "acc.h5",
-        ],
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{stdout}");
     // 7 tolerances each (1e-3 … 1e-9), in the case's table and in the summary.
-    for (name, rows) in [("tsit5", 14), ("dop853", 14), ("dopri5", 0), ("rk4", 0)] {
-        let n = stdout.matches(&format!("| {name} |")).count();
-        assert_eq!(n, rows, "{name}: {stdout}");
-    }
-    let file = StudyReader::open(dir.path().join("acc.h5")).unwrap();
-    assert_eq!(file.layout().case_ids.len(), 14);
+    let rows = [("tsit5", 14), ("dop853", 14), ("dopri5", 0), ("rk4", 0)];
+    let args = ["--methods", "tsit5,dop853"];
+    accuracy_rows(dir.path(), ("crank_rod", 600), &args, &rows, 14);
     // An unknown name is a usage error that lists the known ones.
     let bad = studyrun(dir.path(), &["accuracy", "acc.yaml", "--methods", "euler"]);
     assert_eq!(bad.status.code(), Some(2));
