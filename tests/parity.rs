@@ -388,7 +388,7 @@ proptest! {
             [r[i] * angle[i].cos(), r[i] * angle[i].sin()], v, turns[0], turns[1]);
         let (frozen_at, moved) = (at(0), at(1));
         let mut regime = set.no_regime();
-        set.freeze(&frozen_at, &mut regime);
+        set.freeze(&frozen_at, None, &mut regime);
 
         let natural = set.force(&frozen_at);
         let held = set.force_in(&frozen_at, &regime);

@@ -35,9 +35,9 @@
 use std::cell::Cell;
 
 use crate::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
-use crate::trig::sin_cos4;
+use crate::trig::{sin_cos4, AffineSinCos};
 
-use super::{BearingParams, DampingModel, RaceWaviness};
+use super::{BearingParams, CageWeights, DampingModel, RaceWaviness};
 
 /// Width of the kernel's lane chunks (balls per chunk).
 pub const LANES: usize = 4;
@@ -372,6 +372,20 @@ pub struct BallSet {
     angles: Vec<f64>,
     sines: Vec<f64>,
     cosines: Vec<f64>,
+    /// Set by [`BallSet::turn_with`]: the races turn in proportion to the caller's
+    /// angle, and the angles' sines and cosines come from it.
+    turning: Option<Turning>,
+}
+
+/// Races that turn in proportion to one angle `θ` (rad): the journal by
+/// `journal_rate θ`, the housing by `housing_rate θ`.
+#[derive(Debug, Clone)]
+struct Turning {
+    weights: CageWeights,
+    journal_rate: f64,
+    housing_rate: f64,
+    /// The cage angle, the wave phases and `θ` itself, affine in `θ`.
+    trig: AffineSinCos,
 }
 
 impl BallSet {
@@ -433,7 +447,33 @@ impl BallSet {
             sines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
             cosines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
             waves,
+            turning: None,
         }
+    }
+
+    /// Declares that the races turn in proportion to the caller's angle `θ` (rad)
+    /// of [`BallSet::evaluate`]: the journal by `journal_rate θ`, the housing by
+    /// `housing_rate θ`, the cage as `weights` say. With at most two waviness
+    /// harmonics the cage angle, the wave phases and `θ` are then all affine in `θ`,
+    /// and their sines and cosines come from [`AffineSinCos`] (about half the
+    /// latency of [`sin_cos4`]); the contact state's own angles are not read.
+    /// Returns whether it applies (false with more harmonics, which keep
+    /// [`sin_cos4`]).
+    pub fn turn_with(&mut self, weights: CageWeights, journal_rate: f64, housing_rate: f64) -> bool {
+        if self.waves.len() > 2 {
+            return false;
+        }
+        let rate = weights.contact_state([0.0; 2], [0.0; 2], journal_rate, housing_rate);
+        let mut rates = [0.0; LANES];
+        fill_angles(&mut rates, &self.waves, &rate, false);
+        rates[1 + self.waves.len()] = 1.0;
+        self.turning = Some(Turning {
+            weights,
+            journal_rate,
+            housing_rate,
+            trig: AffineSinCos::new(rates),
+        });
+        true
     }
 
     /// Number of balls `N_b`.
@@ -491,8 +531,7 @@ impl BallSet {
         angle: Option<f64>,
     ) -> (BallSum, (f64, f64)) {
         let extra = 1 + self.waves.len();
-        self.angles[extra] = angle.unwrap_or(0.0);
-        self.prepare::<V>(s, extra + usize::from(angle.is_some()));
+        self.prepare::<V>(s, angle);
         let trig = match angle {
             Some(_) => (self.sines[extra], self.cosines[extra]),
             None => (0.0, 1.0),
@@ -523,8 +562,12 @@ impl BallSet {
     /// Sets `regime` to the balls loaded at state `s` under the natural law, and to
     /// where the damping law acts there: one pass of the kernel that records its
     /// masks. Off the hot path (once per switch): it runs on the portable lanes.
-    pub fn freeze(&mut self, s: &ContactState, regime: &mut Regime) {
-        self.prepare::<F64x4>(s, 1 + self.waves.len());
+    ///
+    /// `angle` is the caller's angle of [`BallSet::evaluate`], if it passes one: with
+    /// [`BallSet::turn_with`] the angles come from it, so the regime is recorded
+    /// from the same sines and cosines the evaluations see.
+    pub fn freeze(&mut self, s: &ContactState, angle: Option<f64>, regime: &mut Regime) {
+        self.prepare::<F64x4>(s, angle);
         let rule = Recording {
             loaded: Cell::from_mut(&mut regime.loaded[..]).as_slice_of_cells(),
             acting: Cell::from_mut(&mut regime.acting[..]).as_slice_of_cells(),
@@ -584,42 +627,47 @@ impl BallSet {
     }
 
     /// Computes the sines and cosines of the cage angle, the wave phases at `s` and
-    /// the caller's angle ([`LANES`] per `sin_cos`).
+    /// the caller's `angle` ([`LANES`] per `sin_cos`), or with
+    /// [`BallSet::turn_with`] and an `angle`, from the angle alone.
     ///
-    /// The first `used` angles are needed. Two or fewer take the scalar `sin_cos`,
-    /// which is cheaper than one [`sin_cos4`] for them.
+    /// Two angles or fewer take the scalar `sin_cos`, which is cheaper than one
+    /// [`sin_cos4`] for them.
     #[inline(always)]
-    fn prepare<V: Lanes>(&mut self, s: &ContactState, used: usize) {
-        let phase = |w: &Wave| {
-            let psi = match w.race {
-                Race::Inner => s.psi_in,
-                Race::Outer => s.psi_out,
-            };
-            w.number * psi + w.phase
-        };
-        self.angles[0] = s.cage;
-        match self.waves.as_slice() {
-            // The common case spelled out: a loop over two waves costs more than them.
-            [w1, w2] => (self.angles[1], self.angles[2]) = (phase(w1), phase(w2)),
-            waves => {
-                for (a, w) in self.angles[1..].iter_mut().zip(waves) {
-                    *a = phase(w);
-                }
-            }
+    fn prepare<V: Lanes>(&mut self, s: &ContactState, angle: Option<f64>) {
+        let Self {
+            waves,
+            angles,
+            sines,
+            cosines,
+            turning,
+            ..
+        } = self;
+        let extra = 1 + waves.len();
+        if let (Some(turn), Some(theta)) = (turning.as_mut(), angle) {
+            let (weights, jr, hr) = (turn.weights, turn.journal_rate, turn.housing_rate);
+            let (sn, cs) = turn.trig.sin_cos::<V>(theta, |theta0| {
+                let at = weights.contact_state([0.0; 2], [0.0; 2], jr * theta0, hr * theta0);
+                let mut a = [0.0; LANES];
+                fill_angles(&mut a, waves, &at, true);
+                a[extra] = theta0;
+                a
+            });
+            sines[..LANES].copy_from_slice(&sn);
+            cosines[..LANES].copy_from_slice(&cs);
+            return;
         }
+        fill_angles(angles, waves, s, true);
+        angles[extra] = angle.unwrap_or(0.0);
+        let used = extra + usize::from(angle.is_some());
         if used <= 2 {
-            for ((a, sn), cs) in self.angles[..used]
-                .iter()
-                .zip(&mut self.sines)
-                .zip(&mut self.cosines)
-            {
+            for ((a, sn), cs) in angles[..used].iter().zip(sines).zip(cosines) {
                 (*sn, *cs) = a.sin_cos();
             }
         } else {
             let groups = used.div_ceil(LANES) * LANES;
-            let sines = self.sines[..groups].chunks_exact_mut(LANES);
-            let cosines = self.cosines[..groups].chunks_exact_mut(LANES);
-            for ((a, sn), cs) in self.angles[..groups]
+            let sines = sines[..groups].chunks_exact_mut(LANES);
+            let cosines = cosines[..groups].chunks_exact_mut(LANES);
+            for ((a, sn), cs) in angles[..groups]
                 .chunks_exact(LANES)
                 .zip(sines)
                 .zip(cosines)
@@ -673,6 +721,33 @@ impl BallSet {
             elastic,
             slope_in,
             slope_out,
+        }
+    }
+}
+
+/// The cage angle of `s` into `angles[0]` and each wave's phase `N ψ + φ` (with
+/// `phase`, else its rate part `N ψ`) into `angles[1..]`.
+#[inline(always)]
+fn fill_angles(angles: &mut [f64], waves: &[Wave], s: &ContactState, phase: bool) {
+    let wave_angle = |w: &Wave| {
+        let psi = match w.race {
+            Race::Inner => s.psi_in,
+            Race::Outer => s.psi_out,
+        };
+        if phase {
+            w.number * psi + w.phase
+        } else {
+            w.number * psi
+        }
+    };
+    angles[0] = s.cage;
+    match waves {
+        // The common case spelled out: a loop over two waves costs more than them.
+        [w1, w2] => (angles[1], angles[2]) = (wave_angle(w1), wave_angle(w2)),
+        waves => {
+            for (a, w) in angles[1..].iter_mut().zip(waves) {
+                *a = wave_angle(w);
+            }
         }
     }
 }

@@ -171,9 +171,15 @@ impl MinimalSliderCrank {
         case.validate()?;
         let mp = &case.mechanism;
         let bearing = (case.location != Location::Ideal).then(|| {
-            let balls = BallSet::new(&case.bearing);
+            let mut balls = BallSet::new(&case.bearing);
+            let weights = CageWeights::of(&case.bearing);
+            if case.location == Location::CrankGround {
+                // The journal turns with the crank, the housing stands still: every
+                // angle of the kernel is affine in the crank angle.
+                balls.turn_with(weights, 1.0, 0.0);
+            }
             Bearing {
-                weights: CageWeights::of(&case.bearing),
+                weights,
                 regime: balls.no_regime(),
                 balls,
                 held: false,
@@ -377,7 +383,8 @@ impl OdeSystem for MinimalSliderCrank {
             return Ok(false);
         };
         let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
-        w.balls.freeze(&state, &mut w.regime);
+        let angle = (self.location == Location::CrankGround).then_some(crank);
+        w.balls.freeze(&state, angle, &mut w.regime);
         w.held = true;
         Ok(true)
     }
