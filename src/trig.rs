@@ -98,20 +98,10 @@ pub fn sin_cos4<V: Lanes>(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
 pub const SMALL_ANGLE: f64 = 0.125;
 
 /// Taylor coefficients `(−1)^i/(2i+1)!`, `i = 1..4`, of `sin x = x + x³ Σ`.
-const SIN_TAYLOR: [f64; 4] = [
-    -1.0 / 6.0,
-    1.0 / 120.0,
-    -1.0 / 5_040.0,
-    1.0 / 362_880.0,
-];
+const SIN_TAYLOR: [f64; 4] = [-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5_040.0, 1.0 / 362_880.0];
 
 /// Taylor coefficients `(−1)^i/(2i+4)!`, `i = 0..3`, of `cos x = 1 − x²/2 + x⁴ Σ`.
-const COS_TAYLOR: [f64; 4] = [
-    1.0 / 24.0,
-    -1.0 / 720.0,
-    1.0 / 40_320.0,
-    -1.0 / 3_628_800.0,
-];
+const COS_TAYLOR: [f64; 4] = [1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0, -1.0 / 3_628_800.0];
 
 /// `(sin x, cos x)` lane by lane for `|x| ≤` [`SMALL_ANGLE`].
 #[inline(always)]
@@ -210,7 +200,10 @@ impl AffineSinCos {
         let (sx, cx) = sin_cos_small(x);
         let point = &self.slots[slot];
         let (sa, ca) = (V::load(&point.sin), V::load(&point.cos));
-        ((sa * cx + ca * sx).to_array(), (ca * cx - sa * sx).to_array())
+        (
+            (sa * cx + ca * sx).to_array(),
+            (ca * cx - sa * sx).to_array(),
+        )
     }
 }
 
@@ -312,7 +305,9 @@ mod tests {
             let got = a.sin_cos::<F64x4>(theta, angles);
             let want = super::sin_cos4::<F64x4>(angles(theta));
             for i in 0..4 {
-                worst = worst.max((got.0[i] - want.0[i]).abs()).max((got.1[i] - want.1[i]).abs());
+                worst = worst
+                    .max((got.0[i] - want.0[i]).abs())
+                    .max((got.1[i] - want.1[i]).abs());
             }
             if k % 997 == 0 {
                 // A fresh cache (no grid point held) gives the same bits.

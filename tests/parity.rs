@@ -23,6 +23,7 @@ use studyrun::bearing::{BallSet, BearingParams, DampingModel, Harmonic, RaceWavi
 use studyrun::bearing::{CageWeights, ContactState};
 use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, Sample, SliderCrank};
 use studyrun::multibody::{BodyRef, Pose};
+use studyrun::simd::F64x4;
 use studyrun::solve::{integrate, Method, SolverSettings};
 
 fn waves(n: u32, a: f64, phase: f64) -> RaceWaviness {
@@ -355,6 +356,71 @@ proptest! {
         // A ball within roundoff of δ = 0 may count on either side.
         let marginal = twin.iter().filter(|b| b.delta.abs() < delta_error).count();
         prop_assert!(sum.loaded.abs_diff(loaded) <= marginal, "loaded {} vs {}", sum.loaded, loaded);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Races that turn with the caller's angle θ (`BallSet::turn_with`, the path of
+    /// every crank_ground evaluation: sines and cosines from a grid point turned by
+    /// a small angle) give the kernel's force on the contact state at θ, and θ's own
+    /// sine and cosine, up to the angles' rounding; a fresh set (nothing cached)
+    /// gives the same bits.
+    #[test]
+    fn turning_races_match_the_kernel_at_their_angle(
+        balls in 3usize..40,
+        damping in prop_oneof![Just(0.0), 1.0f64..1e4],
+        r in 0.0f64..30e-6,
+        angle in -10.0f64..10.0,
+        v in prop::array::uniform2(-0.5f64..0.5),
+        theta in -300.0f64..300.0,
+        harmonics in (0usize..=2, 0usize..=2),
+    ) {
+        let params = kernel_params(balls, damping, DampingModel::CompressionOnly, harmonics);
+        let weights = CageWeights::of(&params);
+        let state = weights.contact_state([r * angle.cos(), r * angle.sin()], v, theta, 0.0);
+        let mut plain = BallSet::new(&params);
+        let want = plain.force(&state);
+        let mut turning = BallSet::new(&params);
+        let applies = turning.turn_with(weights, 1.0, 0.0);
+        prop_assert_eq!(applies, harmonics.0 + harmonics.1 <= 2);
+        // Walk up to θ the way an integrator does, so the cache holds other points.
+        for step in (1..=5).rev() {
+            let earlier = theta - 0.004 * f64::from(step);
+            let s = weights.contact_state(state.e, v, earlier, 0.0);
+            turning.evaluate::<F64x4>(&s, None, Some(earlier));
+        }
+        let (got, (sin, cos)) = turning.evaluate::<F64x4>(&state, None, Some(theta));
+        let mut fresh_set = BallSet::new(&params);
+        fresh_set.turn_with(weights, 1.0, 0.0);
+        let (fresh, trig) = fresh_set.evaluate::<F64x4>(&state, None, Some(theta));
+        prop_assert_eq!(format!("{got:?} {sin:?} {cos:?}"), format!("{fresh:?} {:?} {:?}", trig.0, trig.1));
+        // θ's sine and cosine: within a few ulp of |θ| (the grid point's reduction).
+        prop_assert!((sin - theta.sin()).abs() <= 1e-15 * (1.0 + theta.abs()));
+        prop_assert!((cos - theta.cos()).abs() <= 1e-15 * (1.0 + theta.abs()));
+        // The phases N ψ + φ round differently on the two paths (a few ulp of
+        // N |ψ| + |φ|, ψ up to |θ|), which the µm amplitudes turn into deflections;
+        // the cage angle's rounding turns the normals by ~ulp(|θ|).
+        let delta_error: f64 = 1e-18
+            + [&params.inner_waviness, &params.outer_waviness]
+                .iter()
+                .flat_map(|race| race.harmonics.iter())
+                .map(|h| {
+                    let arg = f64::from(h.number) * (theta.abs() + std::f64::consts::TAU);
+                    h.amplitude * 8.0 * f64::EPSILON * (arg + h.phase.abs())
+                })
+                .sum::<f64>();
+        let twin: Vec<_> = (0..balls).map(|b| plain.ball(b, &state)).collect();
+        let largest = twin.iter().map(|b| b.force).fold(0.0, f64::max);
+        let k = params.stiffness;
+        let tol = (1e-12 + 8.0 * f64::EPSILON * theta.abs()) * largest
+            + twin.iter().map(|b| 1.5 * k * b.delta.max(0.0).sqrt() * delta_error).sum::<f64>()
+            + 1e-30;
+        prop_assert!((got.force[0] - want.force[0]).abs() <= tol, "Fx {} vs {}", got.force[0], want.force[0]);
+        prop_assert!((got.force[1] - want.force[1]).abs() <= tol, "Fy {} vs {}", got.force[1], want.force[1]);
+        let marginal = twin.iter().filter(|b| b.delta.abs() < delta_error).count();
+        prop_assert!(got.loaded.abs_diff(want.loaded) <= marginal);
     }
 }
 

@@ -459,7 +459,12 @@ impl BallSet {
     /// latency of [`sin_cos4`]); the contact state's own angles are not read.
     /// Returns whether it applies (false with more harmonics, which keep
     /// [`sin_cos4`]).
-    pub fn turn_with(&mut self, weights: CageWeights, journal_rate: f64, housing_rate: f64) -> bool {
+    pub fn turn_with(
+        &mut self,
+        weights: CageWeights,
+        journal_rate: f64,
+        housing_rate: f64,
+    ) -> bool {
         if self.waves.len() > 2 {
             return false;
         }
@@ -667,11 +672,7 @@ impl BallSet {
             let groups = used.div_ceil(LANES) * LANES;
             let sines = sines[..groups].chunks_exact_mut(LANES);
             let cosines = cosines[..groups].chunks_exact_mut(LANES);
-            for ((a, sn), cs) in angles[..groups]
-                .chunks_exact(LANES)
-                .zip(sines)
-                .zip(cosines)
-            {
+            for ((a, sn), cs) in angles[..groups].chunks_exact(LANES).zip(sines).zip(cosines) {
                 let (vs, vc) = sin_cos4::<V>([a[0], a[1], a[2], a[3]]);
                 sn.copy_from_slice(&vs);
                 cs.copy_from_slice(&vc);
