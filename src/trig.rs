@@ -54,12 +54,15 @@ const C: [f64; 6] = [
     -1.135_964_755_778_819_482_65e-11,
 ];
 
-/// `Σ coef_i z^i` by Horner's rule.
+/// `Σ coef_i z^i` by Horner's rule. (A loop, not a closure: a closure LLVM does not
+/// inline is compiled without the caller's target features.)
 #[inline(always)]
-fn horner<V: Lanes>(z: V, coef: &[f64; 6]) -> V {
-    coef.iter()
-        .rev()
-        .fold(V::zero(), |acc, &c| acc * z + V::splat(c))
+fn horner<V: Lanes, const N: usize>(z: V, coef: &[f64; N]) -> V {
+    let mut acc = V::zero();
+    for &c in coef.iter().rev() {
+        acc = acc * z + V::splat(c);
+    }
+    acc
 }
 
 /// `(sin x, cos x)` of four angles `x` (rad), lane by lane, on lanes `V` (every lane
@@ -107,13 +110,8 @@ const COS_TAYLOR: [f64; 4] = [1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0, -1.0 / 3
 #[inline(always)]
 fn sin_cos_small<V: Lanes>(x: V) -> (V, V) {
     let z = x * x;
-    let poly = |coef: &[f64; 4]| {
-        coef.iter()
-            .rev()
-            .fold(V::zero(), |acc, &c| acc * z + V::splat(c))
-    };
-    let sin = x + x * z * poly(&SIN_TAYLOR);
-    let cos = (V::splat(1.0) - V::splat(0.5) * z) + z * z * poly(&COS_TAYLOR);
+    let sin = x + x * z * horner(z, &SIN_TAYLOR);
+    let cos = (V::splat(1.0) - V::splat(0.5) * z) + z * z * horner(z, &COS_TAYLOR);
     (sin, cos)
 }
 
