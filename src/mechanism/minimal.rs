@@ -45,9 +45,57 @@ struct Constants {
     crank_moves: f64,
     /// Gravity (m/s²) along −y, 0 when off.
     g: f64,
+    /// The reduced mass matrix `M̄ = [[m11, m_h t], [m_h t, m22]]`, `t = tan θ3`,
+    /// by its parts (kg): `m11 = m2 c_g + m3 + m4`, `m_h = m3/2 + m4`, and
+    /// `m22 = m22_0 + (j3/L3² + m_q sin²θ3)/cos²θ3` with `m22_0 = m2 c_g + m3/4`,
+    /// `m_q = m3/4 + m4`, `j3/L3²` as `j3_l3`.
+    m11: f64,
+    m_h: f64,
+    m22_0: f64,
+    m_q: f64,
+    j3_l3: f64,
+    /// `det M̄ cos²θ3 = p0 + p1 sin²θ3` (kg²).
+    p0: f64,
+    p1: f64,
 }
 
 impl Constants {
+    /// The constants of mechanism `mp` with the bearing at `location`, crank speed
+    /// `omega` (rad/s) and gravity `g` (m/s², 0 when off).
+    fn new(mp: &super::MechanismParams, location: Location, omega: f64, g: f64) -> Self {
+        let inv_l3 = 1.0 / mp.rod_length;
+        let (m2, m3, j3, m4) = (mp.crank_mass, mp.rod_mass, mp.rod_inertia, mp.slider_mass);
+        let crank_moves = if location == Location::CrankGround {
+            1.0
+        } else {
+            0.0
+        };
+        let m11 = m2 * crank_moves + m3 + m4;
+        let m_h = 0.5 * m3 + m4;
+        let m22_0 = m2 * crank_moves + 0.25 * m3;
+        let m_q = 0.25 * m3 + m4;
+        let j3_l3 = j3 * inv_l3 * inv_l3;
+        Self {
+            l2: mp.crank_length,
+            l3: mp.rod_length,
+            inv_l3,
+            m2,
+            m3,
+            j3,
+            m4,
+            omega,
+            crank_moves,
+            g,
+            m11,
+            m_h,
+            m22_0,
+            m_q,
+            j3_l3,
+            p0: m11 * (m22_0 + j3_l3),
+            p1: m11 * (m_q - m22_0) - m_h * m_h,
+        }
+    }
+
     /// Kinematics at crank angle `ω t` given as `(sin, cos)`, eccentricity `e` (m)
     /// and its rate `ed` (m/s).
     #[inline(always)]
@@ -60,7 +108,8 @@ impl Constants {
         let k = self;
         let w2 = k.omega * k.omega;
         let s = -(e[1] + k.l2 * uy) * k.inv_l3;
-        let c2 = 1.0 - s * s;
+        let s2 = s * s;
+        let c2 = 1.0 - s2;
         if c2.is_nan() {
             return Err(ModelError::NonFinite {
                 what: "eccentricity",
@@ -69,9 +118,11 @@ impl Constants {
         if c2 <= 1e-12 {
             return Err(ModelError::SingularConstraints);
         }
+        // The two divisions and the square root depend on s alone and run side by
+        // side: 1/c = c · (1/c²), and M̄⁻¹ = adj(M̄) cos²θ3 / (p0 + p1 s²).
         let c = c2.sqrt();
-        // One division for both `1/(L3 c)` and `s/c`.
-        let inv_c = 1.0 / c;
+        let inv_c = c * (1.0 / c2);
+        let inv_p = 1.0 / (k.p0 + k.p1 * s2);
         let k_theta = -k.inv_l3 * inv_c;
         // θ̇3 = ∂θ3/∂A_y Ȧ_y; θ̈3 = k_θ (Ä_y − L3 s θ̇3²) with Ä = ë − L2 ω² u.
         let theta_d = k_theta * (ed[1] + k.l2 * k.omega * ux);
@@ -90,6 +141,11 @@ impl Constants {
             rod_dd0: [big_end_x + 0.5 * along, -0.5 * k.l2 * w2 * uy],
             slider_dd0: big_end_x + along,
             crank_dd0: [-0.5 * k.l2 * w2 * ux, -0.5 * k.l2 * w2 * uy],
+            inv_mass: [
+                (k.m22_0 * c2 + k.j3_l3 + k.m_q * s2) * inv_p,
+                -k.m_h * s * c * inv_p,
+                k.m11 * c2 * inv_p,
+            ],
         })
     }
 
@@ -98,26 +154,17 @@ impl Constants {
     fn eccentricity_acceleration(&self, kin: &Kinematics, f: [f64; 2]) -> [f64; 2] {
         let k = self;
         let (t, cg) = (kin.tan, k.crank_moves);
-        let m11 = k.m2 * cg + k.m3 + k.m4;
-        let m12 = (0.5 * k.m3 + k.m4) * t;
-        let m22 = k.m2 * cg
-            + k.j3 * kin.k_theta * kin.k_theta
-            + 0.25 * k.m3 * (t * t + 1.0)
-            + k.m4 * t * t;
-        // The journal receives −F; gravity's generalised force is constant.
-        let bx =
-            -f[0] - k.m2 * cg * kin.crank_dd0[0] - k.m3 * kin.rod_dd0[0] - k.m4 * kin.slider_dd0;
-        let by = -f[1]
-            - k.g * (k.m2 * cg + 0.5 * k.m3)
+        // The generalised forces without the bearing's, which comes last (it waits
+        // for the ball loop): the journal receives −F; gravity's part is constant.
+        let qx = -(k.m2 * cg * kin.crank_dd0[0]) - k.m3 * kin.rod_dd0[0] - k.m4 * kin.slider_dd0;
+        let qy = -(k.g * (k.m2 * cg + 0.5 * k.m3))
             - k.m2 * cg * kin.crank_dd0[1]
             - k.j3 * kin.k_theta * kin.theta_dd0
             - k.m3 * (0.5 * t * kin.rod_dd0[0] + 0.5 * kin.rod_dd0[1])
             - k.m4 * t * kin.slider_dd0;
-        let inv_det = 1.0 / (m11 * m22 - m12 * m12);
-        [
-            (m22 * bx - m12 * by) * inv_det,
-            (m11 * by - m12 * bx) * inv_det,
-        ]
+        let (bx, by) = (qx - f[0], qy - f[1]);
+        let [i11, i12, i22] = kin.inv_mass;
+        [i11 * bx + i12 * by, i12 * bx + i22 * by]
     }
 }
 
@@ -151,6 +198,8 @@ struct Kinematics {
     rod_dd0: [f64; 2],
     slider_dd0: f64,
     crank_dd0: [f64; 2],
+    /// `M̄⁻¹` (1/kg) as its entries `[11, 12, 22]`.
+    inv_mass: [f64; 3],
 }
 
 /// The slider-crank case in minimal coordinates; implements [`OdeSystem`] for the
@@ -188,22 +237,12 @@ impl MinimalSliderCrank {
         });
         Ok(Self {
             location: case.location,
-            k: Constants {
-                l2: mp.crank_length,
-                l3: mp.rod_length,
-                inv_l3: 1.0 / mp.rod_length,
-                m2: mp.crank_mass,
-                m3: mp.rod_mass,
-                j3: mp.rod_inertia,
-                m4: mp.slider_mass,
-                omega: case.omega(),
-                crank_moves: if case.location == Location::CrankGround {
-                    1.0
-                } else {
-                    0.0
-                },
-                g: if case.gravity { GRAVITY } else { 0.0 },
-            },
+            k: Constants::new(
+                mp,
+                case.location,
+                case.omega(),
+                if case.gravity { GRAVITY } else { 0.0 },
+            ),
             bearing,
             isa: Isa::detect(),
         })
