@@ -118,29 +118,37 @@ impl Constants {
         if c2 <= 1e-12 {
             return Err(ModelError::SingularConstraints);
         }
-        // The two divisions and the square root depend on s alone and run side by
-        // side: 1/c = c · (1/c²), and M̄⁻¹ = adj(M̄) cos²θ3 / (p0 + p1 s²).
+        // The divisions and the square root depend on s alone and run side by side:
+        // 1/c = c · (1/c²), M̄⁻¹ = adj(M̄) cos²θ3 / (p0 + p1 s²), and every term
+        // below that needs only 1/c² (k_θ², the whirl, tan θ3 times the along-rod
+        // part) takes it instead of 1/c.
         let c = c2.sqrt();
-        let inv_c = c * (1.0 / c2);
+        let inv_c2 = 1.0 / c2;
         let inv_p = 1.0 / (k.p0 + k.p1 * s2);
-        let k_theta = -k.inv_l3 * inv_c;
-        // θ̇3 = ∂θ3/∂A_y Ȧ_y; θ̈3 = k_θ (Ä_y − L3 s θ̇3²) with Ä = ë − L2 ω² u.
-        let theta_d = k_theta * (ed[1] + k.l2 * k.omega * ux);
-        let whirl = k.l3 * theta_d * theta_d;
-        let theta_dd0 = k_theta * (-k.l2 * w2 * uy - s * whirl);
-        // Along the rod: −L3 (s θ̈3 + c θ̇3²) at ë = 0.
-        let along = -(s * k.l3 * theta_dd0 + c * whirl);
+        let inv_c = c * inv_c2;
+        // θ̇3 = k_θ Ȧ_y with k_θ = ∂θ3/∂A_y = −1/(L3 c); the whirl L3 θ̇3².
+        let rate = ed[1] + k.l2 * k.omega * ux;
+        let whirl = k.inv_l3 * inv_c2 * (rate * rate);
+        // At ë = 0, with Ä_y = −L2 ω² sin ωt: θ̈3 = k_θ (Ä_y − s whirl), and along
+        // the rod −L3 (s θ̈3 + c θ̇3²) = (s Ä_y − whirl)/c.
+        let big_end_y = -k.l2 * w2 * uy;
+        let (normal, along_c) = (big_end_y - s * whirl, s * big_end_y - whirl);
+        let along = along_c * inv_c;
         let big_end_x = -k.l2 * w2 * ux;
         Ok(Kinematics {
             u: [ux, uy],
             s,
             c,
             tan: s * inv_c,
-            k_theta,
-            theta_dd0,
-            rod_dd0: [big_end_x + 0.5 * along, -0.5 * k.l2 * w2 * uy],
+            k_theta: -k.inv_l3 * inv_c,
+            theta_dd0: -k.inv_l3 * inv_c * normal,
+            rod_dd0: [big_end_x + 0.5 * along, 0.5 * big_end_y],
             slider_dd0: big_end_x + along,
-            crank_dd0: [-0.5 * k.l2 * w2 * ux, -0.5 * k.l2 * w2 * uy],
+            crank_dd0: [0.5 * big_end_x, 0.5 * big_end_y],
+            big_end_x,
+            along,
+            j3_theta_dd0: k.j3_l3 * inv_c2 * normal,
+            tan_along: s * along_c * inv_c2,
             inv_mass: [
                 (k.m22_0 * c2 + k.j3_l3 + k.m_q * s2) * inv_p,
                 -k.m_h * s * c * inv_p,
@@ -153,15 +161,18 @@ impl Constants {
     #[inline(always)]
     fn eccentricity_acceleration(&self, kin: &Kinematics, f: [f64; 2]) -> [f64; 2] {
         let k = self;
-        let (t, cg) = (kin.tan, k.crank_moves);
+        let cg = k.crank_moves;
         // The generalised forces without the bearing's, which comes last (it waits
         // for the ball loop): the journal receives −F; gravity's part is constant.
-        let qx = -(k.m2 * cg * kin.crank_dd0[0]) - k.m3 * kin.rod_dd0[0] - k.m4 * kin.slider_dd0;
+        // The rod's and slider's terms are gathered by what they multiply.
+        let qx =
+            -(k.m2 * cg * kin.crank_dd0[0]) - (k.m3 + k.m4) * kin.big_end_x - k.m_h * kin.along;
         let qy = -(k.g * (k.m2 * cg + 0.5 * k.m3))
             - k.m2 * cg * kin.crank_dd0[1]
-            - k.j3 * kin.k_theta * kin.theta_dd0
-            - k.m3 * (0.5 * t * kin.rod_dd0[0] + 0.5 * kin.rod_dd0[1])
-            - k.m4 * t * kin.slider_dd0;
+            - kin.j3_theta_dd0
+            - 0.5 * k.m3 * kin.rod_dd0[1]
+            - k.m_h * kin.tan * kin.big_end_x
+            - k.m_q * kin.tan_along;
         let (bx, by) = (qx - f[0], qy - f[1]);
         let [i11, i12, i22] = kin.inv_mass;
         [i11 * bx + i12 * by, i12 * bx + i22 * by]
@@ -198,6 +209,14 @@ struct Kinematics {
     rod_dd0: [f64; 2],
     slider_dd0: f64,
     crank_dd0: [f64; 2],
+    /// The big end's x acceleration `−L2 ω² cos ωt` (m/s²).
+    big_end_x: f64,
+    /// The slider's acceleration relative to the big end's x at `ë = 0`, `(s Ä_y − L3 θ̇3²)/c` (m/s²).
+    along: f64,
+    /// `J3 k_θ θ̈3` at `ë = 0` (N), from `k_θ² = 1/(L3² cos²θ3)`.
+    j3_theta_dd0: f64,
+    /// `tan θ3 · along` (m/s²), from `1/cos²θ3`.
+    tan_along: f64,
     /// `M̄⁻¹` (1/kg) as its entries `[11, 12, 22]`.
     inv_mass: [f64; 3],
 }
