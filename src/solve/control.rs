@@ -175,7 +175,13 @@ impl StepController {
         }
         let raw = SAFETY * err.powf(-self.alpha);
         if err <= 1.0 {
-            let mut factor = (raw * self.err_prev.powf(self.beta)).clamp(MIN_FACTOR, MAX_FACTOR);
+            // β = 0 (DOP853) is plain I control: `err_prev^0 = 1` without a `pow` call.
+            let memory = if self.beta == 0.0 {
+                1.0
+            } else {
+                self.err_prev.powf(self.beta)
+            };
+            let mut factor = (raw * memory).clamp(MIN_FACTOR, MAX_FACTOR);
             if self.rejected_last {
                 factor = factor.min(1.0);
             }
