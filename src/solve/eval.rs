@@ -21,6 +21,7 @@ pub(crate) struct Problem<'a> {
 
 /// Evaluates `f(t, y)` into `dydt`, counting it and mapping a model failure to
 /// [`SolveError::Model`].
+#[inline(always)]
 pub(crate) fn eval<S: OdeSystem>(
     sys: &mut S,
     t: f64,

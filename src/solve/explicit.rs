@@ -159,6 +159,7 @@ fn combine(y: &[f64], h: f64, weights: &[f64], k: &[f64], out: &mut [f64]) {
 /// `k_i = f(t + c h, state)`; the slopes `k_0 … k_{i−1}` are already in `k`. A
 /// non-finite stage state is reported before `f` sees it.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn stage<S: OdeSystem>(
     sys: &mut S,
     (t, h): (f64, f64),
