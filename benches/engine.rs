@@ -8,7 +8,9 @@
 //!   baseline (`all_sse2`), and of the general Cartesian core for the gain of the
 //!   specialisation;
 //! - `sample/...`: one output sample (all of MODEL.md §3), also on the baseline;
-//! - `case/...`: one whole paper case, and the ideal mechanism.
+//! - `case/...`: one whole paper case, and the ideal mechanism;
+//! - `encode/...`: the paper case's 12 series encoded into the chunks the study file
+//!   stores (shuffle, then deflate at level 1), the workers' share of the output cost.
 //!
 //! Run: `cargo bench --bench engine`. Figures are kept in README.md ("Current figures").
 
@@ -17,6 +19,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use studyrun::bearing::{BallSet, BearingParams, CageWeights, DampingModel, RaceWaviness};
 use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, SliderCrank};
+use studyrun::output::{ChunkEncoder, Storage};
 use studyrun::simd::Isa;
 use studyrun::simulate::{simulate, Sampling};
 use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
@@ -226,5 +229,32 @@ fn whole_case(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernel, rhs, sample, whole_case);
+/// The paper case's 12 series (20 001 float64 samples each) encoded as the study
+/// file stores them by default (shuffle + deflate level 1), per case; throughput in
+/// raw bytes.
+fn encode(c: &mut Criterion) {
+    let sampling = Sampling {
+        duration: 0.4,
+        sample_rate: 50_000.0,
+    };
+    let settings = SolverSettings::new(Method::DEFAULT);
+    let out = simulate(&paper_case(Location::CrankGround), &settings, &sampling).unwrap();
+    let raw: usize = out.channels.iter().map(|s| 8 * s.len()).sum();
+    let mut group = c.benchmark_group("encode");
+    group.throughput(Throughput::Bytes(raw as u64));
+    let mut encoder = ChunkEncoder::new(Storage::default());
+    let mut bytes = Vec::with_capacity(raw + raw / 64);
+    group.bench_function("paper_case_12_series", |b| {
+        b.iter(|| {
+            bytes.clear();
+            for series in &out.channels {
+                encoder.encode(black_box(series), &mut bytes);
+            }
+            bytes.len()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernel, rhs, sample, whole_case, encode);
 criterion_main!(benches);

@@ -22,6 +22,7 @@
 use zlib_rs::{Deflate, DeflateConfig, DeflateFlush, Method, Strategy};
 
 use super::layout::Storage;
+use super::shuffle::shuffle;
 
 /// Byte planes whose estimated entropy (bits per byte, of at most [`SAMPLE`] bytes)
 /// exceeds this are stored without compression. On the 384 float64 series of
@@ -109,7 +110,7 @@ impl ChunkEncoder {
         };
         let n = values.len();
         self.shuffled.resize(n * E, 0);
-        shuffle(values, bytes, &mut self.shuffled);
+        shuffle(values, E == 4, &mut self.shuffled);
         // Whether to deflate each byte plane, decided once per plane.
         let deflated: Vec<bool> = if n == 0 {
             Vec::new()
@@ -134,51 +135,6 @@ impl ChunkEncoder {
         out.extend_from_slice(&[1, 0, 0, 0xff, 0xff]);
         out.extend_from_slice(&zlib_rs::adler32::adler32(1, &self.shuffled).to_be_bytes());
     }
-}
-
-/// HDF5's shuffle: byte `j` of element `i` goes to `dst[j * n + i]` (`n` elements of
-/// `E ≤ 8` bytes).
-fn shuffle<const E: usize>(values: &[f64], bytes: impl Fn(f64) -> [u8; E], dst: &mut [u8]) {
-    const BLOCK: usize = 8;
-    let n = values.len();
-    let whole = n - n % BLOCK;
-    for (k, block) in values[..whole].chunks_exact(BLOCK).enumerate() {
-        // Eight elements as the rows of an 8×8 byte matrix; its columns are the planes.
-        let mut rows = [0u64; BLOCK];
-        for (r, &v) in rows.iter_mut().zip(block) {
-            let mut b = [0u8; 8];
-            b[..E].copy_from_slice(&bytes(v));
-            *r = u64::from_le_bytes(b);
-        }
-        for (j, plane) in transpose_bytes(rows).iter().take(E).enumerate() {
-            let at = j * n + k * BLOCK;
-            dst[at..at + BLOCK].copy_from_slice(&plane.to_le_bytes());
-        }
-    }
-    for (i, &v) in values.iter().enumerate().skip(whole) {
-        for (j, b) in bytes(v).into_iter().enumerate() {
-            dst[j * n + i] = b;
-        }
-    }
-}
-
-/// Transposes an 8×8 byte matrix held as eight little-endian rows: byte `j` of row `m`
-/// becomes byte `m` of row `j` (three rounds of masked swaps of 4-, 2- and 1-byte
-/// blocks, all in registers).
-fn transpose_bytes(mut a: [u64; 8]) -> [u64; 8] {
-    for (step, mask, pairs) in [
-        (32, 0x0000_0000_FFFF_FFFF_u64, [0, 1, 2, 3]),
-        (16, 0x0000_FFFF_0000_FFFF, [0, 1, 4, 5]),
-        (8, 0x00FF_00FF_00FF_00FF, [0, 2, 4, 6]),
-    ] {
-        let distance = step / 8;
-        for i in pairs {
-            let t = ((a[i] >> step) ^ a[i + distance]) & mask;
-            a[i] ^= t << step;
-            a[i + distance] ^= t;
-        }
-    }
-    a
 }
 
 /// Whether deflate is worth running on a byte plane: its byte entropy, estimated on
@@ -381,25 +337,6 @@ mod tests {
             "a constant row deflates to little: {}",
             nan.len()
         );
-    }
-
-    #[test]
-    fn shuffle_puts_byte_j_of_element_i_at_j_n_plus_i() {
-        for n in [0, 1, 7, 8, 9, 64, 67] {
-            let values: Vec<f64> = (0..n).map(|i| (i as f64 + 0.1).exp()).collect();
-            let mut dst = vec![0u8; 8 * n];
-            shuffle(&values, f64::to_ne_bytes, &mut dst);
-            let mut dst32 = vec![0u8; 4 * n];
-            shuffle(&values, |v| (v as f32).to_ne_bytes(), &mut dst32);
-            for (i, v) in values.iter().enumerate() {
-                for (j, b) in v.to_ne_bytes().into_iter().enumerate() {
-                    assert_eq!(dst[j * n + i], b, "n {n} element {i} byte {j}");
-                }
-                for (j, b) in (*v as f32).to_ne_bytes().into_iter().enumerate() {
-                    assert_eq!(dst32[j * n + i], b, "f32 n {n} element {i} byte {j}");
-                }
-            }
-        }
     }
 
     #[test]
