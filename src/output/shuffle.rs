@@ -97,43 +97,50 @@ mod sse2 {
         }
     }
 
-    /// Shuffles the whole blocks of float64 `values` into `dst` (`8 n` bytes);
+    /// Shuffles the whole blocks of `values` into `dst` (`R n` bytes: `R` bytes per
+    /// element), `load` giving the registers of one block of [`BLOCK`] elements;
     /// returns how many elements it did.
-    pub(super) fn shuffle_f64(values: &[f64], dst: &mut [u8]) -> usize {
+    #[inline(always)]
+    fn blocks<const R: usize>(
+        values: &[f64],
+        dst: &mut [u8],
+        load: impl Fn(&[f64; BLOCK]) -> [__m128i; R],
+    ) -> usize {
         let n = values.len();
-        assert_eq!(dst.len(), 8 * n, "the destination holds the row's bytes");
+        assert_eq!(dst.len(), R * n, "the destination holds the row's bytes");
         let blocks = values.chunks_exact(BLOCK);
         let whole = n - blocks.remainder().len();
         for (k, block) in blocks.enumerate() {
+            store(load(block.try_into().expect("a whole block")), k, n, dst);
+        }
+        whole
+    }
+
+    /// Shuffles the whole blocks of float64 `values` into `dst` (`8 n` bytes);
+    /// returns how many elements it did.
+    pub(super) fn shuffle_f64(values: &[f64], dst: &mut [u8]) -> usize {
+        blocks::<8>(values, dst, |block| {
             let p: *const __m128i = block.as_ptr().cast();
             // SAFETY: `block` is 16 float64 = 128 readable bytes, eight unaligned loads
             // (SSE2, baseline).
-            let a: [__m128i; 8] = std::array::from_fn(|r| unsafe { _mm_loadu_si128(p.add(r)) });
-            store(a, k, n, dst);
-        }
-        whole
+            std::array::from_fn(|r| unsafe { _mm_loadu_si128(p.add(r)) })
+        })
     }
 
     /// Shuffles the whole blocks of `values`, rounded to nearest float32 (as `as f32`
     /// does), into `dst` (`4 n` bytes); returns how many elements it did.
     pub(super) fn shuffle_f32(values: &[f64], dst: &mut [u8]) -> usize {
-        let n = values.len();
-        assert_eq!(dst.len(), 4 * n, "the destination holds the row's bytes");
-        let blocks = values.chunks_exact(BLOCK);
-        let whole = n - blocks.remainder().len();
-        for (k, block) in blocks.enumerate() {
+        blocks::<4>(values, dst, |block| {
             let p = block.as_ptr();
-            let a: [__m128i; 4] = std::array::from_fn(|r| {
+            std::array::from_fn(|r| {
                 // SAFETY: elements 4r..4r + 4 of the 16 in `block` (unaligned loads);
                 // SSE and SSE2 are part of the x86-64 baseline.
                 unsafe {
                     let (lo, hi) = (_mm_loadu_pd(p.add(4 * r)), _mm_loadu_pd(p.add(4 * r + 2)));
                     _mm_castps_si128(_mm_movelh_ps(_mm_cvtpd_ps(lo), _mm_cvtpd_ps(hi)))
                 }
-            });
-            store(a, k, n, dst);
-        }
-        whole
+            })
+        })
     }
 }
 
