@@ -241,38 +241,59 @@ fn shards_merge_into_the_single_run() {
     assert_same_data(&dir.path().join("whole.h5"), &dir.path().join("merged.h5"));
 }
 
-/// kill -9 in the middle of a run leaves no result file (only the journal); `--resume`
-/// finishes it, and the file equals an uninterrupted run's.
-#[test]
-fn resume_after_kill_gives_the_uninterrupted_result() {
-    let dir = tempfile::tempdir().unwrap();
-    let grid = "name: long\nduration: 0.2\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
-    write(dir.path(), "long.yaml", grid);
-    let journal = dir.path().join("long.h5.journal");
+/// Starts `studyrun` in `dir` with `args` and kills it (-9) once `journal` holds more
+/// than `bytes` bytes.
+fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
-        .current_dir(dir.path())
-        .args(["long.yaml", "-j", "1", "-q"])
+        .current_dir(dir)
+        .args(args)
         .spawn()
         .unwrap();
-    // Wait until a few cases are in the journal, then kill -9.
     let start = Instant::now();
-    while std::fs::metadata(&journal).map_or(0, |m| m.len()) < 3 * 100_000 {
+    while std::fs::metadata(journal).map_or(0, |m| m.len()) <= bytes {
         assert!(start.elapsed() < Duration::from_secs(120), "no progress");
         assert!(
             child.try_wait().unwrap().is_none(),
             "the run finished before it could be killed"
         );
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_millis(2));
     }
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
+}
+
+/// kill -9 in the middle of a run leaves no result file (only the journal and the
+/// partial file its records point into); `--resume` goes on from there, a resumed run
+/// killed again resumes again, and the file equals an uninterrupted run's.
+#[test]
+fn resume_after_kill_gives_the_uninterrupted_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = "name: long\nduration: 0.4\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
+    write(dir.path(), "long.yaml", grid);
+    let journal = dir.path().join("long.h5.journal");
+    // A record is a few hundred bytes: kill after a few cases.
+    kill_when_journal_passes(dir.path(), &["long.yaml", "-j", "1", "-q"], &journal, 1500);
     assert!(
         !dir.path().join("long.h5").exists(),
         "a killed run must not leave a result file"
     );
-    assert!(journal.exists());
+    assert!(journal.exists() && dir.path().join("long.h5.partial").exists());
     let refused = studyrun(dir.path(), &["long.yaml"]);
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
+    // The resumed run replays into `long.h5.partial.resumed`; kill it a few cases on.
+    let replayed = std::fs::metadata(&journal).unwrap().len();
+    kill_when_journal_passes(
+        dir.path(),
+        &["long.yaml", "--resume", "-j", "1", "-q"],
+        &journal,
+        replayed + 1500,
+    );
+    assert!(!dir.path().join("long.h5").exists());
+    assert!(
+        dir.path().join("long.h5.partial.resumed").exists()
+            && !dir.path().join("long.h5.partial").exists(),
+        "the resumed run writes the other partial file and removes the one it read"
+    );
     let resumed = studyrun(dir.path(), &["long.yaml", "--resume"]);
     assert!(
         resumed.status.success(),
@@ -280,7 +301,12 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
         String::from_utf8_lossy(&resumed.stderr)
     );
     assert!(String::from_utf8_lossy(&resumed.stderr).contains("from the journal"));
-    assert!(!journal.exists());
+    for side in ["journal", "journal.new", "partial", "partial.resumed"] {
+        assert!(
+            !dir.path().join(format!("long.h5.{side}")).exists(),
+            "long.h5.{side} is left behind"
+        );
+    }
     assert!(
         studyrun(dir.path(), &["long.yaml", "-o", "straight.h5", "-q"])
             .status

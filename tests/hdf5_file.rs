@@ -411,6 +411,63 @@ fn resume_writes_into_an_existing_file() {
     );
 }
 
+/// What the crash journal relies on: while the file is still open (nothing flushed),
+/// the bytes at each offset `chunk_offsets` gives are the chunk `write_encoded` wrote,
+/// for every row written so far.
+#[test]
+fn chunk_offsets_point_at_the_written_chunks_before_any_flush() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("offsets.h5");
+    let storage = Storage::default();
+    let layout = synthetic_layout(storage);
+    let mut writer = StudyWriter::create(&path, &layout).unwrap();
+    let mut plan = SpectrumPlan::new(N_TIME, Window::Hann).unwrap();
+    let mut encoder = ChunkEncoder::new(storage);
+    let mut written: Vec<(usize, Vec<Vec<u8>>)> = Vec::new();
+    for row in WRITE_ORDER {
+        let case = synthetic_case(row, &mut plan);
+        let chunks: Vec<Vec<u8>> = case
+            .series
+            .iter()
+            .chain(&case.spectra)
+            .map(|values| {
+                let mut c = Vec::new();
+                encoder.encode(values, &mut c);
+                c
+            })
+            .collect();
+        let refs: Vec<&[u8]> = chunks.iter().map(Vec::as_slice).collect();
+        let (series, spectra) = refs.split_at(case.series.len());
+        let record = EncodedRecord {
+            series,
+            spectra,
+            metrics: &case.metrics,
+            status: Status::Ok,
+            message: "",
+        };
+        writer.write_encoded(row, &record).unwrap();
+        written.push((row, chunks));
+        let file = std::fs::read(&path).unwrap();
+        for (row, chunks) in &written {
+            let offsets = writer.chunk_offsets(*row).unwrap();
+            assert_eq!(offsets.len(), chunks.len());
+            for (k, (&at, chunk)) in offsets.iter().zip(chunks).enumerate() {
+                let at = at as usize;
+                assert!(
+                    file.get(at..at + chunk.len()) == Some(&chunk[..]),
+                    "row {row}, chunk {k}: the file at {at} is not the chunk written"
+                );
+            }
+        }
+    }
+    let err = writer.chunk_offsets(UNWRITTEN).unwrap_err().to_string();
+    assert!(
+        err.contains("offsets.h5") && err.contains("no stored chunk"),
+        "{err}"
+    );
+    writer.finish().unwrap();
+}
+
 #[test]
 fn errors_name_the_file_and_the_variable() {
     let dir = tempfile::tempdir().unwrap();

@@ -10,7 +10,7 @@ use hdf5::{Dataset, File, H5Type};
 use super::attributes;
 use super::datasets::{check_row, RowDatasets};
 use super::dimension_scales::{attach_scale, set_scale};
-use super::direct_chunk::{chunked_by_row, write_row_chunk};
+use super::direct_chunk::{chunked_by_row, row_chunk_offset, write_row_chunk};
 use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
@@ -338,6 +338,19 @@ impl StudyWriter {
         self.scalars
             .set(row, record.metrics, record.status, record.message);
         Ok(())
+    }
+
+    /// The file offset (bytes) of row `row`'s stored chunk of every series, then
+    /// every spectrum variable, as [`StudyWriter::write_encoded`] wrote them: where a
+    /// crash journal finds the bytes again in a file that was never closed (HDF5
+    /// writes a chunk's raw bytes through to the file at once, and never moves them).
+    pub fn chunk_offsets(&self, row: usize) -> Result<Vec<u64>, StudyFileError> {
+        let series = self.rows.series.iter().zip(&self.layout.series);
+        let spectra = self.rows.spectra.iter().zip(&self.layout.spectra);
+        series
+            .chain(spectra)
+            .map(|(ds, spec)| row_chunk_offset(ds, row).at(&self.path, &spec.name))
+            .collect()
     }
 
     /// Checks a record against the layout before anything of it is written.

@@ -1,35 +1,51 @@
-//! The crash journal: every finished case is appended here before it goes into the
-//! HDF5 file, so a run killed at any moment can resume without recomputing it.
+//! The crash journal: every finished case is recorded here once its chunks are in the
+//! partial HDF5 file, so a run killed at any moment can resume without recomputing it.
 //!
 //! The HDF5 file is written as `OUT.h5.partial` and renamed to `OUT.h5` only when
 //! complete (an atomic rename), so `OUT.h5` is either absent or whole. The journal
 //! `OUT.h5.journal` is deleted after the rename.
 //!
-//! A case's journal record is also the form in which it reaches the writer thread: a
-//! worker encodes the series and spectra into the chunks the study file stores
-//! ([`ChunkEncoder`]) straight into the record, and checksums it
-//! ([`JournalRecord::encode`]). The writer thread appends the bytes to the journal and
-//! hands the chunks to HDF5's direct chunk write; resuming replays the same records.
+//! The journal does not hold the chunks: a case's record says where HDF5 put each of
+//! its stored chunks in the partial file (file offset, length, CRC-32), so the bytes
+//! are written once. A killed run's partial file is not readable as HDF5 (its metadata
+//! was never flushed), but its chunks' bytes are where HDF5 wrote them (`H5Dwrite_chunk`
+//! hands raw data straight to the file driver). Resuming reads them back, checks each
+//! CRC (a case with a chunk that does not match is run again) and writes them into a
+//! new partial file.
 //!
-//! Format: a header (magic, fingerprint of the study, array sizes, storage), then
-//! records `[b"CASE", row u64, status i8, message length u32, message bytes, number of
-//! series u32, number of spectra u32, chunk lengths u64 each, chunk bytes, number of
-//! metrics u32, metrics f64 each, CRC-32 of the record u32]`, little-endian. Reading
-//! stops at the first truncated or corrupt record (a kill during a write), which is
-//! cut off before appending again.
+//! Resuming never changes the files it reads: it writes the other of the two partial
+//! files ([`DataFile`]: `OUT.h5.partial`, `OUT.h5.partial.resumed`) and a new journal
+//! `OUT.h5.journal.new` that names it, replays into them, then renames the new journal
+//! over the old one (the switch, atomic) and deletes the old partial file. A kill at
+//! any moment leaves a journal whose partial file holds its chunks.
+//!
+//! A case's chunks reach the writer thread in a [`JournalRecord`]: a worker encodes the
+//! series and spectra into the chunks the study file stores ([`ChunkEncoder`]) and
+//! checksums each. The writer thread hands the chunks to HDF5's direct chunk write,
+//! asks HDF5 where they went, and appends the record ([`JournalWriter::write`]).
+//!
+//! Format: a header (magic, fingerprint of the study, array sizes, storage, the partial
+//! file), then records `[b"CASE", row u64, status i8, message length u32, message
+//! bytes, number of series u32, number of spectra u32, per chunk (offset u64, length
+//! u64, CRC-32 u32), number of metrics u32, metrics f64 each, CRC-32 of the record
+//! u32]`, little-endian. Reading stops at the first truncated or corrupt record (a kill
+//! during a write).
 
-use std::fs::{File, OpenOptions};
-use std::io::{self, BufReader, Read, Seek, SeekFrom, Write};
+use std::fs::File;
+use std::io::{self, BufReader, Read, Write};
 use std::ops::Range;
-use std::path::Path;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
 
 use super::case::CaseResult;
 use crate::output::{ChunkEncoder, EncodedRecord, Status, Storage, StudyFileError, StudyWriter};
 
-const MAGIC: &[u8; 8] = b"SRJOURN2";
+const MAGIC: &[u8; 8] = b"SRJOURN3";
 const RECORD: &[u8; 4] = b"CASE";
 /// Bytes of a record before its message: tag, row, status, message length.
 const FIXED: usize = 4 + 8 + 1 + 4;
+/// Bytes of a chunk's entry in a record: offset, length, CRC-32.
+const CHUNK_ENTRY: usize = 8 + 8 + 4;
 
 /// What a journal must match to be resumed: the study, the array sizes and storage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,6 +92,49 @@ impl JournalHeader {
     }
 }
 
+/// Which of the two partial files a journal's chunks lie in; a resumed run writes the
+/// other one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DataFile {
+    /// `OUT.h5.partial`, where a fresh run writes.
+    Partial,
+    /// `OUT.h5.partial.resumed`.
+    Resumed,
+}
+
+impl DataFile {
+    /// The partial file of this name for the result file `output`.
+    pub fn path(self, output: &Path) -> PathBuf {
+        let mut s = output.as_os_str().to_owned();
+        s.push(match self {
+            Self::Partial => ".partial",
+            Self::Resumed => ".partial.resumed",
+        });
+        PathBuf::from(s)
+    }
+
+    /// The other partial file: where a run resumed from this one writes.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Partial => Self::Resumed,
+            Self::Resumed => Self::Partial,
+        }
+    }
+
+    fn code(self) -> u8 {
+        match self {
+            Self::Partial => 0,
+            Self::Resumed => 1,
+        }
+    }
+
+    fn from_code(code: u8) -> Option<Self> {
+        [Self::Partial, Self::Resumed]
+            .into_iter()
+            .find(|d| d.code() == code)
+    }
+}
+
 /// FNV-1a, 64 bit: the study fingerprint.
 pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -88,70 +147,55 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     h
 }
 
-/// CRC-32 (zlib's) of a record: what tells a whole record from a torn one.
+/// CRC-32 (zlib's): of a record, what tells a whole record from a torn one; of a
+/// chunk, what tells its bytes in the partial file from anything else.
 fn checksum(bytes: &[u8]) -> u32 {
     zlib_rs::crc32::crc32(0, bytes)
 }
 
-/// One finished case as a journal record: its bytes (with the series and spectra
-/// inside as stored chunks) and where its parts lie in them.
+/// One finished case on its way to the study file: its series and spectra as the
+/// chunks the file stores, with their checksums, and its scalars.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JournalRecord {
-    bytes: Vec<u8>,
     row: usize,
     status: Status,
-    message: Range<usize>,
+    message: String,
     n_series: usize,
+    /// The stored chunks, one after the other (series, then spectra).
+    bytes: Vec<u8>,
     chunks: Vec<Range<usize>>,
+    /// CRC-32 of each chunk.
+    sums: Vec<u32>,
     metrics: Vec<f64>,
 }
 
 impl JournalRecord {
     /// Encodes `result`: its series and spectra into chunks by `encoder` (which must
-    /// encode for the study file's storage), then the whole record with its checksum.
-    /// Meant for the worker thread that computed the case.
+    /// encode for the study file's storage), each with its checksum. Meant for the
+    /// worker thread that computed the case.
     pub fn encode(result: &CaseResult, encoder: &mut ChunkEncoder) -> Self {
-        let rows = result.series.len() + result.spectra.len();
         let raw: usize = result
             .series
             .iter()
             .chain(&result.spectra)
             .map(|r| 8 * r.len())
             .sum();
-        let mut b = Vec::with_capacity(FIXED + result.message.len() + 8 * rows + raw + 64);
-        b.extend(RECORD);
-        b.extend((result.row as u64).to_le_bytes());
-        b.push(result.status.code() as u8);
-        b.extend((result.message.len() as u32).to_le_bytes());
-        b.extend(result.message.as_bytes());
-        let message = FIXED..FIXED + result.message.len();
-        b.extend((result.series.len() as u32).to_le_bytes());
-        b.extend((result.spectra.len() as u32).to_le_bytes());
-        let lengths_at = b.len();
-        b.resize(lengths_at + 8 * rows, 0);
-        let mut chunks = Vec::with_capacity(rows);
+        let mut bytes = Vec::with_capacity(raw + raw / 64 + 64);
+        let mut chunks = Vec::with_capacity(result.series.len() + result.spectra.len());
         for values in result.series.iter().chain(&result.spectra) {
-            let start = b.len();
-            encoder.encode(values, &mut b);
-            chunks.push(start..b.len());
+            let start = bytes.len();
+            encoder.encode(values, &mut bytes);
+            chunks.push(start..bytes.len());
         }
-        for (k, c) in chunks.iter().enumerate() {
-            let at = lengths_at + 8 * k;
-            b[at..at + 8].copy_from_slice(&(c.len() as u64).to_le_bytes());
-        }
-        b.extend((result.metrics.len() as u32).to_le_bytes());
-        for v in &result.metrics {
-            b.extend(v.to_le_bytes());
-        }
-        let sum = checksum(&b);
-        b.extend(sum.to_le_bytes());
+        let sums = chunks.iter().map(|c| checksum(&bytes[c.clone()])).collect();
         Self {
-            bytes: b,
             row: result.row,
             status: result.status,
-            message,
+            message: result.message.clone(),
             n_series: result.series.len(),
+            bytes,
             chunks,
+            sums,
             metrics: result.metrics.clone(),
         }
     }
@@ -168,7 +212,7 @@ impl JournalRecord {
 
     /// Why the case failed (empty when ok).
     pub fn message(&self) -> &str {
-        std::str::from_utf8(&self.bytes[self.message.clone()]).expect("checked UTF-8")
+        &self.message
     }
 
     /// One value per metric (NaN where unknown).
@@ -176,18 +220,14 @@ impl JournalRecord {
         &self.metrics
     }
 
-    /// The record's bytes, as the journal stores them.
-    pub fn bytes(&self) -> &[u8] {
-        &self.bytes
-    }
-
     /// Size of the chunks (series and spectra as stored) in bytes.
     pub fn chunk_bytes(&self) -> usize {
-        self.chunks.iter().map(Range::len).sum()
+        self.bytes.len()
     }
 
-    /// Writes the case into the study file: its chunks go in unchanged.
-    pub fn write_to(&self, writer: &mut StudyWriter) -> Result<(), StudyFileError> {
+    /// Writes the case into the study file (its chunks go in unchanged) and returns
+    /// the file offset of each chunk, for [`JournalWriter::write`].
+    pub fn write_to(&self, writer: &mut StudyWriter) -> Result<Vec<u64>, StudyFileError> {
         let chunks: Vec<&[u8]> = self.chunks.iter().map(|c| &self.bytes[c.clone()]).collect();
         let (series, spectra) = chunks.split_at(self.n_series);
         writer.write_encoded(
@@ -197,36 +237,109 @@ impl JournalRecord {
                 spectra,
                 metrics: &self.metrics,
                 status: self.status,
-                message: self.message(),
+                message: &self.message,
             },
-        )
+        )?;
+        if self.chunks.is_empty() {
+            return Ok(Vec::new());
+        }
+        writer.chunk_offsets(self.row)
     }
 }
 
 /// Appends records; every record is written whole and handed to the OS.
 pub struct JournalWriter {
     file: File,
+    /// A record's bytes, reused.
+    buf: Vec<u8>,
 }
 
 impl JournalWriter {
-    /// A new journal at `path` (replacing any file there).
-    pub fn create(path: &Path, header: &JournalHeader) -> io::Result<Self> {
+    /// A new journal at `path` (replacing any file there) of cases whose chunks lie in
+    /// the partial file `data`.
+    pub fn create(path: &Path, header: &JournalHeader, data: DataFile) -> io::Result<Self> {
         let mut file = File::create(path)?;
-        file.write_all(&header.bytes())?;
-        Ok(Self { file })
+        let mut b = header.bytes();
+        b.push(data.code());
+        file.write_all(&b)?;
+        Ok(Self {
+            file,
+            buf: Vec::new(),
+        })
     }
 
-    /// Reopens the journal at `path` for appending after its first `valid_len` bytes.
-    pub fn append(path: &Path, valid_len: u64) -> io::Result<Self> {
-        let mut file = OpenOptions::new().write(true).open(path)?;
-        file.set_len(valid_len)?;
-        file.seek(SeekFrom::End(0))?;
-        Ok(Self { file })
+    /// Appends `record`, whose chunks [`JournalRecord::write_to`] put at `offsets` of
+    /// the partial file.
+    pub fn write(&mut self, record: &JournalRecord, offsets: &[u64]) -> io::Result<()> {
+        assert_eq!(offsets.len(), record.chunks.len(), "one offset per chunk");
+        let b = &mut self.buf;
+        b.clear();
+        b.extend(RECORD);
+        b.extend((record.row as u64).to_le_bytes());
+        b.push(record.status.code() as u8);
+        b.extend((record.message.len() as u32).to_le_bytes());
+        b.extend(record.message.as_bytes());
+        b.extend((record.n_series as u32).to_le_bytes());
+        b.extend(((record.chunks.len() - record.n_series) as u32).to_le_bytes());
+        for ((offset, chunk), sum) in offsets.iter().zip(&record.chunks).zip(&record.sums) {
+            b.extend(offset.to_le_bytes());
+            b.extend((chunk.len() as u64).to_le_bytes());
+            b.extend(sum.to_le_bytes());
+        }
+        b.extend((record.metrics.len() as u32).to_le_bytes());
+        for v in &record.metrics {
+            b.extend(v.to_le_bytes());
+        }
+        let sum = checksum(b);
+        b.extend(sum.to_le_bytes());
+        self.file.write_all(b)
+    }
+}
+
+/// A case as the journal records it: its scalars and where its chunks lie.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JournalEntry {
+    row: usize,
+    status: Status,
+    message: String,
+    n_series: usize,
+    /// Offset, length and CRC-32 of each chunk in the partial file.
+    chunks: Vec<(u64, u64, u32)>,
+    metrics: Vec<f64>,
+}
+
+impl JournalEntry {
+    /// The case's row in the study file.
+    pub fn row(&self) -> usize {
+        self.row
     }
 
-    /// Appends one case.
-    pub fn write(&mut self, record: &JournalRecord) -> io::Result<()> {
-        self.file.write_all(&record.bytes)
+    /// The case with its chunks read from `data` (the journal's partial file), or
+    /// `None` if a chunk cannot be read or does not match its checksum.
+    pub fn load(&self, data: &File) -> Option<JournalRecord> {
+        let total: u64 = self.chunks.iter().map(|&(_, len, _)| len).sum();
+        let mut bytes = vec![0u8; usize::try_from(total).ok()?];
+        let mut ranges = Vec::with_capacity(self.chunks.len());
+        let mut start = 0;
+        for &(offset, len, sum) in &self.chunks {
+            let range = start..start + len as usize;
+            data.read_exact_at(&mut bytes[range.clone()], offset).ok()?;
+            if checksum(&bytes[range.clone()]) != sum {
+                return None;
+            }
+            start = range.end;
+            ranges.push(range);
+        }
+        Some(JournalRecord {
+            row: self.row,
+            status: self.status,
+            message: self.message.clone(),
+            n_series: self.n_series,
+            bytes,
+            chunks: ranges,
+            sums: self.chunks.iter().map(|&(_, _, sum)| sum).collect(),
+            metrics: self.metrics.clone(),
+        })
     }
 }
 
@@ -234,8 +347,7 @@ impl JournalWriter {
 pub struct JournalReader {
     input: BufReader<File>,
     header: JournalHeader,
-    /// Bytes of the header and the valid records read so far.
-    valid_len: u64,
+    data: DataFile,
 }
 
 /// Why a journal cannot be resumed.
@@ -266,26 +378,28 @@ impl JournalReader {
         };
         let mut input = BufReader::new(File::open(path).map_err(io_err)?);
         let want = expected.bytes();
-        let mut got = vec![0u8; want.len()];
-        if input.read_exact(&mut got).is_err() || got != want {
-            return Err(JournalError::Mismatch {
-                path: path.display().to_string(),
-            });
-        }
+        let mut got = vec![0u8; want.len() + 1];
+        let data = match input.read_exact(&mut got) {
+            Ok(()) if got[..want.len()] == want[..] => DataFile::from_code(got[want.len()]),
+            _ => None,
+        };
+        let data = data.ok_or_else(|| JournalError::Mismatch {
+            path: path.display().to_string(),
+        })?;
         Ok(Self {
             input,
             header: *expected,
-            valid_len: want.len() as u64,
+            data,
         })
     }
 
-    /// Length in bytes of the header and every valid record read so far.
-    pub fn valid_len(&self) -> u64 {
-        self.valid_len
+    /// The partial file the journal's chunks lie in.
+    pub fn data_file(&self) -> DataFile {
+        self.data
     }
 
     /// The next valid record, or `None` at the end or at a truncated/corrupt record.
-    pub fn next_record(&mut self) -> Option<JournalRecord> {
+    pub fn next_entry(&mut self) -> Option<JournalEntry> {
         let h = self.header;
         let mut b = Vec::new();
         let mut take = |n: u64, b: &mut Vec<u8>| -> Option<Range<usize>> {
@@ -296,14 +410,16 @@ impl JournalReader {
         };
         let u32_at =
             |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"));
+        let u64_at =
+            |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"));
         take(FIXED as u64, &mut b)?;
         if &b[..4] != RECORD {
             return None;
         }
-        let row = u64::from_le_bytes(b[4..12].try_into().ok()?) as usize;
+        let row = usize::try_from(u64_at(&b, 4)).ok()?;
         let status = Status::from_code(b[12] as i8)?;
         let message = take(u64::from(u32_at(&b, 13)), &mut b)?;
-        std::str::from_utf8(&b[message.clone()]).ok()?;
+        let message = std::str::from_utf8(&b[message]).ok()?.to_owned();
         let counts = take(8, &mut b)?;
         let n_series = u32_at(&b, counts.start) as usize;
         let n_spectra = u32_at(&b, counts.start + 4) as usize;
@@ -311,20 +427,16 @@ impl JournalReader {
         if !whole && (n_series, n_spectra) != (0, 0) {
             return None;
         }
-        let lengths = take(8 * (n_series + n_spectra) as u64, &mut b)?;
+        let entries = take((CHUNK_ENTRY * (n_series + n_spectra)) as u64, &mut b)?;
         let mut chunks = Vec::with_capacity(n_series + n_spectra);
-        for (k, len) in b[lengths].chunks_exact(8).enumerate() {
-            let len = u64::from_le_bytes(len.try_into().ok()?);
+        for (k, e) in b[entries].chunks_exact(CHUNK_ENTRY).enumerate() {
+            let (offset, len, sum) = (u64_at(e, 0), u64_at(e, 8), u32_at(e, 16));
             let dim = if k < n_series { h.n_time } else { h.n_freq };
             if len > h.max_chunk(dim) {
                 return None;
             }
-            chunks.push(len);
+            chunks.push((offset, len, sum));
         }
-        let chunks = chunks
-            .into_iter()
-            .map(|len| take(len, &mut b))
-            .collect::<Option<Vec<_>>>()?;
         let n_metrics = take(4, &mut b)?;
         if u64::from(u32_at(&b, n_metrics.start)) != h.n_metrics {
             return None;
@@ -338,9 +450,7 @@ impl JournalReader {
             .chunks_exact(8)
             .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
             .collect();
-        self.valid_len += b.len() as u64;
-        Some(JournalRecord {
-            bytes: b,
+        Some(JournalEntry {
             row,
             status,
             message,
@@ -388,39 +498,69 @@ mod tests {
         }
     }
 
-    #[test]
-    fn round_trips_and_stops_at_a_torn_record() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("j");
-        let header = header(7);
-        let mut encoder = ChunkEncoder::new(header.storage);
-        let mut w = JournalWriter::create(&path, &header).unwrap();
-        let written: Vec<JournalRecord> = [(4, true), (1, false), (2, true)]
-            .into_iter()
-            .map(|(row, ok)| JournalRecord::encode(&result(row, ok), &mut encoder))
-            .collect();
-        for rec in &written {
-            w.write(rec).unwrap();
+    /// Writes `records` the way a run does: each record's chunks into the data file
+    /// `data` (after `gap` bytes of something else, as HDF5 puts metadata between
+    /// chunks), then the record into a new journal at `path`.
+    fn write_journal(
+        path: &Path,
+        data: &Path,
+        header: &JournalHeader,
+        records: &[JournalRecord],
+    ) -> u64 {
+        let mut file = File::create(data).unwrap();
+        let mut w = JournalWriter::create(path, header, DataFile::Resumed).unwrap();
+        let mut at = 0u64;
+        for rec in records {
+            let mut offsets = Vec::new();
+            for c in &rec.chunks {
+                at += 100; // a gap
+                file.write_all_at(&rec.bytes[c.clone()], at).unwrap();
+                offsets.push(at);
+                at += c.len() as u64;
+            }
+            w.write(rec, &offsets).unwrap();
         }
-        drop(w);
+        file.flush().unwrap();
+        std::fs::metadata(path).unwrap().len()
+    }
+
+    fn records(header: &JournalHeader, cases: &[(usize, bool)]) -> Vec<JournalRecord> {
+        let mut encoder = ChunkEncoder::new(header.storage);
+        cases
+            .iter()
+            .map(|&(row, ok)| JournalRecord::encode(&result(row, ok), &mut encoder))
+            .collect()
+    }
+
+    #[test]
+    fn round_trips_through_the_data_file_and_stops_at_a_torn_record() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
+        let header = header(7);
+        let written = records(&header, &[(4, true), (1, false), (2, true)]);
+        let full = write_journal(&path, &data, &header, &written);
         // A kill in the middle of a fourth record leaves a torn tail.
-        let full = std::fs::metadata(&path).unwrap().len();
-        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
-        f.write_all(&written[0].bytes()[..40]).unwrap();
+        let torn = std::fs::read(&path).unwrap()[header.bytes().len() + 1..][..40].to_vec();
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .unwrap();
+        f.write_all(&torn).unwrap();
         drop(f);
+        assert!(std::fs::metadata(&path).unwrap().len() > full);
         let mut r = JournalReader::open(&path, &header).unwrap();
+        assert_eq!(r.data_file(), DataFile::Resumed);
+        let data = File::open(&data).unwrap();
         let mut read = Vec::new();
-        while let Some(rec) = r.next_record() {
-            read.push(rec);
+        while let Some(entry) = r.next_entry() {
+            read.push(entry.load(&data).expect("intact chunks"));
         }
         assert_eq!(read.len(), 3);
         for (got, want) in read.iter().zip(&written) {
-            assert_eq!(got.bytes(), want.bytes());
             assert_eq!(format!("{got:?}"), format!("{want:?}")); // NaN-aware equality
         }
         assert_eq!(read[1].message(), "step size underflow");
         assert_eq!(read[1].chunk_bytes(), 0);
-        assert_eq!(r.valid_len(), full);
         for other in [
             JournalHeader {
                 fingerprint: 8,
@@ -444,25 +584,37 @@ mod tests {
     #[test]
     fn a_corrupt_byte_ends_the_valid_records() {
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("j");
+        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
         let header = header(1);
-        let mut encoder = ChunkEncoder::new(header.storage);
-        let mut w = JournalWriter::create(&path, &header).unwrap();
-        let first = JournalRecord::encode(&result(0, true), &mut encoder);
-        w.write(&first).unwrap();
-        w.write(&JournalRecord::encode(&result(1, true), &mut encoder))
-            .unwrap();
-        drop(w);
+        let written = records(&header, &[(0, true), (1, true)]);
+        write_journal(&path, &data, &header, &written[..1]);
+        let first = std::fs::metadata(&path).unwrap().len() as usize;
+        write_journal(&path, &data, &header, &written);
         let mut bytes = std::fs::read(&path).unwrap();
-        let at = header.bytes().len() + first.bytes().len() + 30;
-        bytes[at] ^= 0x40;
+        bytes[first + 30] ^= 0x40;
         std::fs::write(&path, bytes).unwrap();
         let mut r = JournalReader::open(&path, &header).unwrap();
-        assert_eq!(r.next_record().map(|rec| rec.row()), Some(0));
-        assert!(r.next_record().is_none());
-        assert_eq!(
-            r.valid_len(),
-            (header.bytes().len() + first.bytes().len()) as u64
-        );
+        assert_eq!(r.next_entry().map(|e| e.row()), Some(0));
+        assert!(r.next_entry().is_none());
+    }
+
+    #[test]
+    fn a_chunk_that_changed_in_the_data_file_is_not_loaded() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
+        let header = header(3);
+        let written = records(&header, &[(0, true), (1, true)]);
+        write_journal(&path, &data, &header, &written);
+        // One byte inside the second record's last chunk.
+        let mut bytes = std::fs::read(&data).unwrap();
+        let at = bytes.len() - 2;
+        bytes[at] ^= 0x01;
+        std::fs::write(&data, bytes).unwrap();
+        let mut r = JournalReader::open(&path, &header).unwrap();
+        let data = File::open(&data).unwrap();
+        let loaded: Vec<Option<usize>> = std::iter::from_fn(|| r.next_entry())
+            .map(|e| e.load(&data).map(|rec| rec.row()))
+            .collect();
+        assert_eq!(loaded, [Some(0), None]);
     }
 }

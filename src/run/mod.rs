@@ -3,11 +3,12 @@
 //!
 //! Data flow: workers simulate cases, compute spectra and metrics, encode the series
 //! and spectra into the chunks the file stores (float32 conversion, shuffle, deflate)
-//! inside the case's journal record ([`JournalRecord::encode`]), and send the records
-//! through a bounded channel; the calling thread appends each to the journal, copies
-//! its chunks into `OUT.h5.partial` (HDF5 direct chunk write) and reports progress.
-//! At the end the partial file is renamed to `OUT.h5` (atomic) and the journal
-//! removed. Case data do not depend on the number of threads: each case is simulated
+//! with their checksums ([`JournalRecord::encode`]), and send the records through a
+//! bounded channel; the calling thread copies each case's chunks into `OUT.h5.partial`
+//! (HDF5 direct chunk write), appends to the journal where they went, and reports
+//! progress. At the end the partial file is renamed to `OUT.h5` (atomic) and the
+//! journal removed. A resumed run replays the journal into the other partial file
+//! ([`DataFile`]). Case data do not depend on the number of threads: each case is simulated
 //! and encoded on its own, in one thread. [`RunStats`] says where the time went.
 
 mod case;
@@ -21,7 +22,8 @@ mod stats;
 pub use case::{metric_specs, run_case, CaseCost, CaseResult, REFERENCE_CHANNELS};
 pub use inspect::inspect;
 pub use journal::{
-    fnv1a, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
+    fnv1a, DataFile, JournalEntry, JournalError, JournalHeader, JournalReader, JournalRecord,
+    JournalWriter,
 };
 pub use layout::{study_layout, StudyFingerprint, MODEL_CONVENTIONS};
 pub use merge::merge;
@@ -105,14 +107,20 @@ pub struct RunSummary {
     pub stats: RunStats,
 }
 
-/// The journal and partial-file paths that belong to `output`.
+/// The journal and partial-file paths that belong to `output` (the partial file a
+/// fresh run writes; a resumed run may write [`DataFile::Resumed`]).
 pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
-    let with = |ext: &str| {
-        let mut s = output.as_os_str().to_owned();
-        s.push(ext);
-        PathBuf::from(s)
-    };
-    (with(".journal"), with(".partial"))
+    (
+        with_suffix(output, ".journal"),
+        DataFile::Partial.path(output),
+    )
+}
+
+/// `path` with `suffix` appended to its file name.
+fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
 }
 
 /// The ideal-mechanism runs every case is compared with.
@@ -151,9 +159,14 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             study.cases.len()
         );
     }
-    let (journal_path, partial_path) = side_paths(&opts.output);
+    let (journal_path, _) = side_paths(&opts.output);
+    let new_journal_path = with_suffix(&journal_path, ".new");
     if opts.force {
-        for p in [&opts.output, &journal_path, &partial_path] {
+        let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(&opts.output));
+        for p in [&opts.output, &journal_path, &new_journal_path]
+            .into_iter()
+            .chain(&partials)
+        {
             if p.exists() {
                 std::fs::remove_file(p)
                     .with_context(|| format!("cannot remove {}", p.display()))?;
@@ -190,37 +203,75 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let raw_per_case = 8 * (header.n_series * header.n_time + header.n_spectra * header.n_freq);
     let mut stats = RunStats::default();
     let cpu = thread_cpu();
-    let mut writer = StudyWriter::create(&partial_path, &layout)
-        .with_context(|| format!("cannot create {}", partial_path.display()))?;
-    for (k, r) in references.iter().enumerate() {
-        let series: Vec<&[f64]> = REFERENCE_CHANNELS
-            .iter()
-            .map(|c| r.channel(c).expect("reference channel"))
-            .collect();
-        writer.write_reference(k, &series)?;
-    }
-    stats.create = thread_cpu() - cpu;
+    let create = |data: DataFile| -> Result<StudyWriter> {
+        let path = data.path(&opts.output);
+        let mut writer = StudyWriter::create(&path, &layout)
+            .with_context(|| format!("cannot create {}", path.display()))?;
+        for (k, r) in references.iter().enumerate() {
+            let series: Vec<&[f64]> = REFERENCE_CHANNELS
+                .iter()
+                .map(|c| r.channel(c).expect("reference channel"))
+                .collect();
+            writer.write_reference(k, &series)?;
+        }
+        Ok(writer)
+    };
 
-    // Replay what an interrupted run finished.
+    // Replay what an interrupted run finished (see the journal module: the old files
+    // are only read, the new journal replaces the old one once it holds them all).
     let mut done = HashSet::new();
     let (mut ok, mut failed) = (0usize, 0usize);
-    let mut journal = if opts.resume {
+    let (data, mut writer, mut journal) = if opts.resume {
         let mut reader = JournalReader::open(&journal_path, &header)?;
-        while let Some(rec) = reader.next_record() {
-            if rec.row() < rows.len() && done.insert(rec.row()) {
-                rec.write_to(&mut writer)?;
-                if rec.status() == Status::Ok {
-                    ok += 1
-                } else {
-                    failed += 1
-                }
+        let old = reader.data_file().path(&opts.output);
+        let old_data = std::fs::File::open(&old).with_context(|| {
+            format!(
+                "cannot open {}, the partial file that holds the journal's cases; \
+                 run with --force to start over",
+                old.display()
+            )
+        })?;
+        let data = reader.data_file().other();
+        let mut writer = create(data)?;
+        let mut journal = JournalWriter::create(&new_journal_path, &header, data)
+            .with_context(|| format!("cannot create {}", new_journal_path.display()))?;
+        while let Some(entry) = reader.next_entry() {
+            if entry.row() >= rows.len() || done.contains(&entry.row()) {
+                continue;
+            }
+            // A case whose chunks are not intact in the old file is run again.
+            let Some(rec) = entry.load(&old_data) else {
+                continue;
+            };
+            let offsets = rec.write_to(&mut writer)?;
+            journal
+                .write(&rec, &offsets)
+                .with_context(|| format!("cannot append to {}", new_journal_path.display()))?;
+            done.insert(rec.row());
+            if rec.status() == Status::Ok {
+                ok += 1
+            } else {
+                failed += 1
             }
         }
-        JournalWriter::append(&journal_path, reader.valid_len())?
+        std::fs::rename(&new_journal_path, &journal_path).with_context(|| {
+            format!(
+                "cannot rename {} to {}",
+                new_journal_path.display(),
+                journal_path.display()
+            )
+        })?;
+        drop(old_data);
+        std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
+        (data, writer, journal)
     } else {
-        JournalWriter::create(&journal_path, &header)
-            .with_context(|| format!("cannot create {}", journal_path.display()))?
+        let writer = create(DataFile::Partial)?;
+        let journal = JournalWriter::create(&journal_path, &header, DataFile::Partial)
+            .with_context(|| format!("cannot create {}", journal_path.display()))?;
+        (DataFile::Partial, writer, journal)
     };
+    stats.create = thread_cpu() - cpu;
+    let partial_path = data.path(&opts.output);
     let resumed = done.len();
     let pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
 
@@ -232,7 +283,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let window = window_of(study);
     let storage = layout.storage;
     // At most two records per worker wait for the writer: memory stays bounded.
-    let (tx, rx) = sync_channel::<JournalRecord>(2 * opts.jobs.max(1));
+    let (tx, rx) = sync_channel::<Box<JournalRecord>>(2 * opts.jobs.max(1));
     let tally = WorkerTally::default();
     let n_pending = pending.len();
     let (rows_ref, refs, tally_ref) = (&rows, &references, &tally);
@@ -251,7 +302,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
                         let result =
                             run_case(study, row, &case.params, &refs[case.reference], plan);
                         let cpu = thread_cpu();
-                        let record = JournalRecord::encode(&result, encoder);
+                        let record = Box::new(JournalRecord::encode(&result, encoder));
                         tally_ref.case(
                             result.cost.simulate,
                             result.cost.analysis,
@@ -267,13 +318,13 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         // the workers stop instead of waiting for a writer that is gone.
         for rec in rx {
             let cpu = thread_cpu();
+            let offsets = rec.write_to(&mut writer)?;
+            let cpu_hdf5 = thread_cpu();
             journal
-                .write(&rec)
+                .write(&rec, &offsets)
                 .with_context(|| format!("cannot append to {}", journal_path.display()))?;
-            let cpu_journal = thread_cpu();
-            rec.write_to(&mut writer)?;
-            stats.journal += cpu_journal - cpu;
-            stats.hdf5 += thread_cpu() - cpu_journal;
+            stats.hdf5 += cpu_hdf5 - cpu;
+            stats.journal += thread_cpu() - cpu_hdf5;
             stats.stored_bytes += rec.chunk_bytes() as u64;
             if rec.status() == Status::Ok {
                 ok += 1;
