@@ -1,13 +1,11 @@
 //! HDF5's direct chunk write (`H5Dwrite_chunk`, HDF5 ≥ 1.10.3, bound by
 //! `hdf5-metno-sys`): a chunk's stored bytes, already filtered by the caller (see
 //! [`ChunkEncoder`](super::ChunkEncoder)), go into the file as they are, past HDF5's
-//! filter pipeline and chunk cache, and where a written chunk lies in the file
-//! (`H5Dget_chunk_info_by_coord`, HDF5 ≥ 1.10.5).
+//! filter pipeline and chunk cache.
 
 use hdf5::Dataset;
-use hdf5_sys::h5::haddr_t;
 use hdf5_sys::h5::hsize_t;
-use hdf5_sys::h5d::{H5Dget_chunk_info_by_coord, H5Dwrite_chunk};
+use hdf5_sys::h5d::H5Dwrite_chunk;
 use hdf5_sys::h5p::H5P_DEFAULT;
 
 /// Filter mask of a chunk that went through every filter of its dataset's pipeline.
@@ -41,25 +39,4 @@ pub(super) fn write_row_chunk(ds: &Dataset, row: usize, bytes: &[u8]) -> hdf5::R
         )
     });
     hdf5::h5check(status).map(|_| ())
-}
-
-/// The file offset (bytes) of the stored chunk of row `row` of `ds` (chunked by row,
-/// see [`chunked_by_row`]), which [`write_row_chunk`] wrote. The study files have no
-/// user block, so HDF5's address is the offset in the file.
-pub(super) fn row_chunk_offset(ds: &Dataset, row: usize) -> hdf5::Result<u64> {
-    let offset: [hsize_t; 2] = [row as hsize_t, 0];
-    let (mut mask, mut addr, mut size): (u32, haddr_t, hsize_t) = (0, 0, 0);
-    let id = ds.id();
-    // SAFETY: `id` is a valid dataset identifier owned by `ds`, which outlives the
-    // call; `offset` holds one coordinate per dimension (rank 2) and the three outputs
-    // are valid for writing, all living for the call. The call holds hdf5-metno's
-    // global library lock.
-    let status = hdf5::sync::sync(|| unsafe {
-        H5Dget_chunk_info_by_coord(id, offset.as_ptr(), &mut mask, &mut addr, &mut size)
-    });
-    hdf5::h5check(status)?;
-    if addr == haddr_t::MAX {
-        return Err(format!("row {row} has no stored chunk").into());
-    }
-    Ok(addr)
 }

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use hdf5::plist::file_access::MetadataCacheConfig;
+use hdf5::plist::file_access::{FileAccessBuilder, MetadataCacheConfig};
 use hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, File, H5Type};
@@ -10,7 +10,7 @@ use hdf5::{Dataset, File, H5Type};
 use super::attributes;
 use super::datasets::{check_row, RowDatasets};
 use super::dimension_scales::{attach_scale, set_scale};
-use super::direct_chunk::{chunked_by_row, row_chunk_offset, write_row_chunk};
+use super::direct_chunk::{chunked_by_row, write_row_chunk};
 use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
@@ -219,7 +219,7 @@ impl StudyWriter {
             reason,
         })?;
         let file = File::with_options()
-            .with_fapl(|p| p.mdc_config(&bounded_metadata_cache()))
+            .with_fapl(file_access)
             .with_fcpl(|p| {
                 p.link_creation_order(LinkCreationOrder::Indexed)
                     .attr_creation_order(AttrCreationOrder::Indexed)
@@ -242,7 +242,7 @@ impl StudyWriter {
     pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
         let path = path.as_ref().to_owned();
         let file = File::with_options()
-            .with_fapl(|p| p.mdc_config(&bounded_metadata_cache()))
+            .with_fapl(file_access)
             .open_rw(&path)
             .at(&path, "/")?;
         let layout = read_layout(&file, &path)?;
@@ -340,17 +340,14 @@ impl StudyWriter {
         Ok(())
     }
 
-    /// The file offset (bytes) of row `row`'s stored chunk of every series, then
-    /// every spectrum variable, as [`StudyWriter::write_encoded`] wrote them: where a
-    /// crash journal finds the bytes again in a file that was never closed (HDF5
-    /// writes a chunk's raw bytes through to the file at once, and never moves them).
-    pub fn chunk_offsets(&self, row: usize) -> Result<Vec<u64>, StudyFileError> {
-        let series = self.rows.series.iter().zip(&self.layout.series);
-        let spectra = self.rows.spectra.iter().zip(&self.layout.spectra);
-        series
-            .chain(spectra)
-            .map(|(ds, spec)| row_chunk_offset(ds, row).at(&self.path, &spec.name))
-            .collect()
+    /// The file's size (bytes: HDF5's end of allocated space, or the end of the file
+    /// if that is further). A chunk [`StudyWriter::write_encoded`] writes next lies
+    /// after it, possibly after some metadata: HDF5 writes a chunk's raw bytes through
+    /// to the file at once, in space allocated at the end of the file (small-data
+    /// aggregation is off, see `file_access`). What a crash journal records to find a
+    /// case's chunks again.
+    pub fn file_len(&self) -> u64 {
+        self.file.size()
     }
 
     /// Checks a record against the layout before anything of it is written.
@@ -481,6 +478,15 @@ fn case_arrays<'a, R: ?Sized>(
     series
         .chain(spectra)
         .map(|((values, ds), spec)| (&**values, ds, spec))
+}
+
+/// How the writer opens files: HDF5's metadata cache bounded
+/// ([`bounded_metadata_cache`]), and no small-data aggregation, so that every chunk,
+/// however small, is given new space at the end of the file: where
+/// [`StudyWriter::file_len`] says a crash journal finds it.
+fn file_access(p: &mut FileAccessBuilder) -> &mut FileAccessBuilder {
+    p.mdc_config(&bounded_metadata_cache())
+        .small_data_block_size(0)
 }
 
 /// HDF5's metadata cache configuration bounded to [`METADATA_CACHE_BYTES`] (its

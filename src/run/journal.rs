@@ -5,13 +5,17 @@
 //! complete (an atomic rename), so `OUT.h5` is either absent or whole. The journal
 //! `OUT.h5.journal` is deleted after the rename.
 //!
-//! The journal does not hold the chunks: a case's record says where HDF5 put each of
-//! its stored chunks in the partial file (file offset, length, CRC-32), so the bytes
-//! are written once. A killed run's partial file is not readable as HDF5 (its metadata
-//! was never flushed), but its chunks' bytes are where HDF5 wrote them (`H5Dwrite_chunk`
-//! hands raw data straight to the file driver). Resuming reads them back, checks each
-//! CRC (a case with a chunk that does not match is run again) and writes them into a
-//! new partial file.
+//! The journal does not hold the chunks, so the bytes are written once: a case's record
+//! has the partial file's length before its chunks were written and, per chunk, its
+//! length, first eight bytes and CRC-32. A killed run's partial file is not readable as
+//! HDF5 (its metadata was never flushed), but its chunks' bytes are where HDF5 wrote
+//! them: `H5Dwrite_chunk` hands raw data straight to the file driver, and a new chunk's
+//! space is allocated at the end of the file, so a case's chunks follow that length in
+//! order, with at most some HDF5 metadata between them. Resuming finds each one there
+//! (its first bytes, then its CRC over its length), and a case with a chunk it does not
+//! find is run again. (HDF5 1.10 can tell a chunk's address, `H5Dget_chunk_info_by_coord`,
+//! but by a scan of the dataset's chunks: asked per case, a 2 000-case study's writer
+//! spent 0.9 ms per case on it against 0.1 ms at 200 cases.)
 //!
 //! Resuming never changes the files it reads: it writes the other of the two partial
 //! files ([`DataFile`]: `OUT.h5.partial`, `OUT.h5.partial.resumed`) and a new journal
@@ -26,9 +30,9 @@
 //!
 //! Format: a header (magic, fingerprint of the study, array sizes, storage, the partial
 //! file), then records `[b"CASE", row u64, status i8, message length u32, message
-//! bytes, number of series u32, number of spectra u32, per chunk (offset u64, length
-//! u64, CRC-32 u32), number of metrics u32, metrics f64 each, CRC-32 of the record
-//! u32]`, little-endian. Reading stops at the first truncated or corrupt record (a kill
+//! bytes, number of series u32, number of spectra u32, partial file length before the
+//! chunks u64, per chunk (first 8 bytes, length u64, CRC-32 u32), number of metrics
+//! u32, metrics f64 each, CRC-32 of the record u32]`, little-endian. Reading stops at the first truncated or corrupt record (a kill
 //! during a write).
 
 use std::fs::File;
@@ -44,8 +48,14 @@ const MAGIC: &[u8; 8] = b"SRJOURN3";
 const RECORD: &[u8; 4] = b"CASE";
 /// Bytes of a record before its message: tag, row, status, message length.
 const FIXED: usize = 4 + 8 + 1 + 4;
-/// Bytes of a chunk's entry in a record: offset, length, CRC-32.
-const CHUNK_ENTRY: usize = 8 + 8 + 4;
+/// Bytes of a chunk's entry in a record: first bytes, length, CRC-32.
+const CHUNK_ENTRY: usize = PREFIX + 8 + 4;
+/// Bytes of a chunk that its record keeps, to find it again.
+const PREFIX: usize = 8;
+/// Most bytes of HDF5 metadata resuming expects between a case's chunks, all told: it
+/// looks for them between the recorded file length and that plus the chunks' size and
+/// this.
+const SEARCH_SLACK: u64 = 1 << 20;
 
 /// What a journal must match to be resumed: the study, the array sizes and storage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -226,8 +236,9 @@ impl JournalRecord {
     }
 
     /// Writes the case into the study file (its chunks go in unchanged) and returns
-    /// the file offset of each chunk, for [`JournalWriter::write`].
-    pub fn write_to(&self, writer: &mut StudyWriter) -> Result<Vec<u64>, StudyFileError> {
+    /// the file's length before, for [`JournalWriter::write`].
+    pub fn write_to(&self, writer: &mut StudyWriter) -> Result<u64, StudyFileError> {
+        let before = writer.file_len();
         let chunks: Vec<&[u8]> = self.chunks.iter().map(|c| &self.bytes[c.clone()]).collect();
         let (series, spectra) = chunks.split_at(self.n_series);
         writer.write_encoded(
@@ -240,10 +251,7 @@ impl JournalRecord {
                 message: &self.message,
             },
         )?;
-        if self.chunks.is_empty() {
-            return Ok(Vec::new());
-        }
-        writer.chunk_offsets(self.row)
+        Ok(before)
     }
 }
 
@@ -268,10 +276,9 @@ impl JournalWriter {
         })
     }
 
-    /// Appends `record`, whose chunks [`JournalRecord::write_to`] put at `offsets` of
-    /// the partial file.
-    pub fn write(&mut self, record: &JournalRecord, offsets: &[u64]) -> io::Result<()> {
-        assert_eq!(offsets.len(), record.chunks.len(), "one offset per chunk");
+    /// Appends `record`, whose chunks [`JournalRecord::write_to`] wrote into the partial
+    /// file when it was `before` bytes long.
+    pub fn write(&mut self, record: &JournalRecord, before: u64) -> io::Result<()> {
         let b = &mut self.buf;
         b.clear();
         b.extend(RECORD);
@@ -281,8 +288,9 @@ impl JournalWriter {
         b.extend(record.message.as_bytes());
         b.extend((record.n_series as u32).to_le_bytes());
         b.extend(((record.chunks.len() - record.n_series) as u32).to_le_bytes());
-        for ((offset, chunk), sum) in offsets.iter().zip(&record.chunks).zip(&record.sums) {
-            b.extend(offset.to_le_bytes());
+        b.extend(before.to_le_bytes());
+        for (chunk, sum) in record.chunks.iter().zip(&record.sums) {
+            b.extend(prefix(&record.bytes[chunk.clone()]));
             b.extend((chunk.len() as u64).to_le_bytes());
             b.extend(sum.to_le_bytes());
         }
@@ -296,15 +304,51 @@ impl JournalWriter {
     }
 }
 
-/// A case as the journal records it: its scalars and where its chunks lie.
+/// A chunk's first [`PREFIX`] bytes (zero-padded if it is shorter).
+fn prefix(chunk: &[u8]) -> [u8; PREFIX] {
+    let mut p = [0; PREFIX];
+    let n = chunk.len().min(PREFIX);
+    p[..n].copy_from_slice(&chunk[..n]);
+    p
+}
+
+/// What a record keeps of a chunk, to find it again.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ChunkMark {
+    prefix: [u8; PREFIX],
+    len: u64,
+    sum: u32,
+}
+
+impl ChunkMark {
+    /// Where in `window`, at or after `from`, the chunk lies.
+    fn find(&self, window: &[u8], from: usize) -> Option<usize> {
+        let len = usize::try_from(self.len).ok()?;
+        let head = &self.prefix[..len.min(PREFIX)];
+        let mut at = from;
+        while at + len <= window.len() {
+            let found = window[at..].windows(head.len()).position(|w| w == head)?;
+            at += found;
+            let chunk = window.get(at..at + len)?;
+            if checksum(chunk) == self.sum {
+                return Some(at);
+            }
+            at += 1;
+        }
+        None
+    }
+}
+
+/// A case as the journal records it: its scalars and how to find its chunks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JournalEntry {
     row: usize,
     status: Status,
     message: String,
     n_series: usize,
-    /// Offset, length and CRC-32 of each chunk in the partial file.
-    chunks: Vec<(u64, u64, u32)>,
+    /// The partial file's length before the chunks were written.
+    before: u64,
+    chunks: Vec<ChunkMark>,
     metrics: Vec<f64>,
 }
 
@@ -314,21 +358,27 @@ impl JournalEntry {
         self.row
     }
 
-    /// The case with its chunks read from `data` (the journal's partial file), or
-    /// `None` if a chunk cannot be read or does not match its checksum.
+    /// The case with its chunks found in `data` (the journal's partial file), or
+    /// `None` if a chunk is not there: in order, after the recorded file length, within
+    /// [`SEARCH_SLACK`] bytes of other things, with its first bytes and checksum.
     pub fn load(&self, data: &File) -> Option<JournalRecord> {
-        let total: u64 = self.chunks.iter().map(|&(_, len, _)| len).sum();
-        let mut bytes = vec![0u8; usize::try_from(total).ok()?];
+        let total: u64 = self.chunks.iter().map(|c| c.len).sum();
+        let end = data
+            .metadata()
+            .ok()?
+            .len()
+            .min(self.before + total + SEARCH_SLACK);
+        let mut window = vec![0u8; usize::try_from(end.checked_sub(self.before)?).ok()?];
+        data.read_exact_at(&mut window, self.before).ok()?;
+        let mut bytes = Vec::with_capacity(usize::try_from(total).ok()?);
         let mut ranges = Vec::with_capacity(self.chunks.len());
-        let mut start = 0;
-        for &(offset, len, sum) in &self.chunks {
-            let range = start..start + len as usize;
-            data.read_exact_at(&mut bytes[range.clone()], offset).ok()?;
-            if checksum(&bytes[range.clone()]) != sum {
-                return None;
-            }
-            start = range.end;
-            ranges.push(range);
+        let mut cursor = 0;
+        for mark in &self.chunks {
+            let at = mark.find(&window, cursor)?;
+            cursor = at + mark.len as usize;
+            let start = bytes.len();
+            bytes.extend_from_slice(&window[at..cursor]);
+            ranges.push(start..bytes.len());
         }
         Some(JournalRecord {
             row: self.row,
@@ -337,7 +387,7 @@ impl JournalEntry {
             n_series: self.n_series,
             bytes,
             chunks: ranges,
-            sums: self.chunks.iter().map(|&(_, _, sum)| sum).collect(),
+            sums: self.chunks.iter().map(|c| c.sum).collect(),
             metrics: self.metrics.clone(),
         })
     }
@@ -427,15 +477,21 @@ impl JournalReader {
         if !whole && (n_series, n_spectra) != (0, 0) {
             return None;
         }
+        let before = take(8, &mut b)?;
+        let before = u64_at(&b, before.start);
         let entries = take((CHUNK_ENTRY * (n_series + n_spectra)) as u64, &mut b)?;
         let mut chunks = Vec::with_capacity(n_series + n_spectra);
         for (k, e) in b[entries].chunks_exact(CHUNK_ENTRY).enumerate() {
-            let (offset, len, sum) = (u64_at(e, 0), u64_at(e, 8), u32_at(e, 16));
+            let mark = ChunkMark {
+                prefix: e[..PREFIX].try_into().expect("PREFIX bytes"),
+                len: u64_at(e, PREFIX),
+                sum: u32_at(e, PREFIX + 8),
+            };
             let dim = if k < n_series { h.n_time } else { h.n_freq };
-            if len > h.max_chunk(dim) {
+            if mark.len > h.max_chunk(dim) {
                 return None;
             }
-            chunks.push((offset, len, sum));
+            chunks.push(mark);
         }
         let n_metrics = take(4, &mut b)?;
         if u64::from(u32_at(&b, n_metrics.start)) != h.n_metrics {
@@ -455,6 +511,7 @@ impl JournalReader {
             status,
             message,
             n_series,
+            before,
             chunks,
             metrics,
         })
@@ -498,9 +555,9 @@ mod tests {
         }
     }
 
-    /// Writes `records` the way a run does: each record's chunks into the data file
-    /// `data` (after `gap` bytes of something else, as HDF5 puts metadata between
-    /// chunks), then the record into a new journal at `path`.
+    /// Writes `records` the way a run does: each record's chunks at the end of the
+    /// data file `data` (each after 100 bytes of something else, as HDF5 puts
+    /// metadata between chunks), then the record into a new journal at `path`.
     fn write_journal(
         path: &Path,
         data: &Path,
@@ -511,14 +568,14 @@ mod tests {
         let mut w = JournalWriter::create(path, header, DataFile::Resumed).unwrap();
         let mut at = 0u64;
         for rec in records {
-            let mut offsets = Vec::new();
+            let before = at;
             for c in &rec.chunks {
-                at += 100; // a gap
+                file.write_all_at(&[0x78; 100], at).unwrap(); // a gap
+                at += 100;
                 file.write_all_at(&rec.bytes[c.clone()], at).unwrap();
-                offsets.push(at);
                 at += c.len() as u64;
             }
-            w.write(rec, &offsets).unwrap();
+            w.write(rec, before).unwrap();
         }
         file.flush().unwrap();
         std::fs::metadata(path).unwrap().len()

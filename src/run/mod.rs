@@ -243,9 +243,9 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             let Some(rec) = entry.load(&old_data) else {
                 continue;
             };
-            let offsets = rec.write_to(&mut writer)?;
+            let before = rec.write_to(&mut writer)?;
             journal
-                .write(&rec, &offsets)
+                .write(&rec, before)
                 .with_context(|| format!("cannot append to {}", new_journal_path.display()))?;
             done.insert(rec.row());
             if rec.status() == Status::Ok {
@@ -318,10 +318,10 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         // the workers stop instead of waiting for a writer that is gone.
         for rec in rx {
             let cpu = thread_cpu();
-            let offsets = rec.write_to(&mut writer)?;
+            let before = rec.write_to(&mut writer)?;
             let cpu_hdf5 = thread_cpu();
             journal
-                .write(&rec, &offsets)
+                .write(&rec, before)
                 .with_context(|| format!("cannot append to {}", journal_path.display()))?;
             stats.hdf5 += cpu_hdf5 - cpu;
             stats.journal += thread_cpu() - cpu_hdf5;
