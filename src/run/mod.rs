@@ -123,6 +123,16 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
+/// Removes the file at `path` if there is one.
+fn remove_if_exists(path: &Path) -> Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("cannot remove {}", path.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The ideal-mechanism runs every case is compared with.
 pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>> {
     study
@@ -161,17 +171,19 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     }
     let (journal_path, _) = side_paths(&opts.output);
     let new_journal_path = with_suffix(&journal_path, ".new");
-    if opts.force {
+    // With `--force` the old result file is removed on a thread of its own (unlinking
+    // a large file takes milliseconds the run need not wait for); the final rename
+    // waits for it.
+    let removing_output = if opts.force {
         let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(&opts.output));
-        for p in [&opts.output, &journal_path, &new_journal_path]
+        for p in [&journal_path, &new_journal_path]
             .into_iter()
             .chain(&partials)
         {
-            if p.exists() {
-                std::fs::remove_file(p)
-                    .with_context(|| format!("cannot remove {}", p.display()))?;
-            }
+            remove_if_exists(p)?;
         }
+        let output = opts.output.clone();
+        Some(std::thread::spawn(move || remove_if_exists(&output)))
     } else if opts.output.exists() {
         bail!(
             "{} exists; use --force to overwrite it",
@@ -187,9 +199,10 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             "nothing to resume: {} does not exist",
             journal_path.display()
         );
-    }
+    } else {
+        None
+    };
 
-    let references = run_references(study)?;
     let layout = study_layout(study, &rows)?;
     let header = JournalHeader {
         fingerprint: StudyFingerprint::of(study, opts.shard).0,
@@ -202,27 +215,42 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     };
     let raw_per_case = 8 * (header.n_series * header.n_time + header.n_spectra * header.n_freq);
     let mut stats = RunStats::default();
-    let cpu = thread_cpu();
-    let create = |data: DataFile| -> Result<StudyWriter> {
-        let path = data.path(&opts.output);
-        let mut writer = StudyWriter::create(&path, &layout)
-            .with_context(|| format!("cannot create {}", path.display()))?;
-        for (k, r) in references.iter().enumerate() {
-            let series: Vec<&[f64]> = REFERENCE_CHANNELS
-                .iter()
-                .map(|c| r.channel(c).expect("reference channel"))
-                .collect();
-            writer.write_reference(k, &series)?;
-        }
-        Ok(writer)
+    let reader = if opts.resume {
+        Some(JournalReader::open(&journal_path, &header)?)
+    } else {
+        None
     };
+    // A resumed run writes the other partial file than the one the journal's cases
+    // are in.
+    let data = reader
+        .as_ref()
+        .map_or(DataFile::Partial, |r| r.data_file().other());
+    let partial_path = data.path(&opts.output);
+    // The ideal references run while the file is created.
+    let cpu = thread_cpu();
+    let (references, writer) = std::thread::scope(|scope| {
+        let references = scope.spawn(|| run_references(study));
+        let writer = StudyWriter::create(&partial_path, &layout)
+            .with_context(|| format!("cannot create {}", partial_path.display()));
+        let references = references
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (references, writer)
+    });
+    let (references, mut writer) = (references?, writer?);
+    for (k, r) in references.iter().enumerate() {
+        let series: Vec<&[f64]> = REFERENCE_CHANNELS
+            .iter()
+            .map(|c| r.channel(c).expect("reference channel"))
+            .collect();
+        writer.write_reference(k, &series)?;
+    }
 
     // Replay what an interrupted run finished (see the journal module: the old files
     // are only read, the new journal replaces the old one once it holds them all).
     let mut done = HashSet::new();
     let (mut ok, mut failed) = (0usize, 0usize);
-    let (data, mut writer, mut journal) = if opts.resume {
-        let mut reader = JournalReader::open(&journal_path, &header)?;
+    let mut journal = if let Some(mut reader) = reader {
         let old = reader.data_file().path(&opts.output);
         let old_data = std::fs::File::open(&old).with_context(|| {
             format!(
@@ -231,8 +259,6 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
                 old.display()
             )
         })?;
-        let data = reader.data_file().other();
-        let mut writer = create(data)?;
         let mut journal = JournalWriter::create(&new_journal_path, &header, data)
             .with_context(|| format!("cannot create {}", new_journal_path.display()))?;
         while let Some(entry) = reader.next_entry() {
@@ -263,15 +289,12 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         })?;
         drop(old_data);
         std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
-        (data, writer, journal)
+        journal
     } else {
-        let writer = create(DataFile::Partial)?;
-        let journal = JournalWriter::create(&journal_path, &header, DataFile::Partial)
-            .with_context(|| format!("cannot create {}", journal_path.display()))?;
-        (DataFile::Partial, writer, journal)
+        JournalWriter::create(&journal_path, &header, data)
+            .with_context(|| format!("cannot create {}", journal_path.display()))?
     };
     stats.create = thread_cpu() - cpu;
-    let partial_path = data.path(&opts.output);
     let resumed = done.len();
     let pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
 
@@ -348,6 +371,11 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     stats.finish = thread_cpu() - cpu;
     stats.sends = received as u64;
     tally.add_to(&mut stats);
+    if let Some(removing) = removing_output {
+        removing
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+    }
     std::fs::rename(&partial_path, &opts.output).with_context(|| {
         format!(
             "cannot rename {} to {}",
