@@ -324,6 +324,9 @@ impl ChunkMark {
     /// Where in `window`, at or after `from`, the chunk lies.
     fn find(&self, window: &[u8], from: usize) -> Option<usize> {
         let len = usize::try_from(self.len).ok()?;
+        if len == 0 {
+            return Some(from);
+        }
         let head = &self.prefix[..len.min(PREFIX)];
         let mut at = from;
         while at + len <= window.len() {
@@ -581,20 +584,32 @@ mod tests {
         std::fs::metadata(path).unwrap().len()
     }
 
-    fn records(header: &JournalHeader, cases: &[(usize, bool)]) -> Vec<JournalRecord> {
+    /// A scratch directory with the paths of a journal and its data file in it, the
+    /// header of study `fingerprint`, and the records of `cases` (row, ok).
+    fn scene(
+        fingerprint: u64,
+        cases: &[(usize, bool)],
+    ) -> (
+        tempfile::TempDir,
+        PathBuf,
+        PathBuf,
+        JournalHeader,
+        Vec<JournalRecord>,
+    ) {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
+        let header = header(fingerprint);
         let mut encoder = ChunkEncoder::new(header.storage);
-        cases
+        let records = cases
             .iter()
             .map(|&(row, ok)| JournalRecord::encode(&result(row, ok), &mut encoder))
-            .collect()
+            .collect();
+        (dir, path, data, header, records)
     }
 
     #[test]
     fn round_trips_through_the_data_file_and_stops_at_a_torn_record() {
-        let dir = tempfile::tempdir().unwrap();
-        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
-        let header = header(7);
-        let written = records(&header, &[(4, true), (1, false), (2, true)]);
+        let (_dir, path, data, header, written) = scene(7, &[(4, true), (1, false), (2, true)]);
         let full = write_journal(&path, &data, &header, &written);
         // A kill in the middle of a fourth record leaves a torn tail.
         let torn = std::fs::read(&path).unwrap()[header.bytes().len() + 1..][..40].to_vec();
@@ -640,10 +655,7 @@ mod tests {
 
     #[test]
     fn a_corrupt_byte_ends_the_valid_records() {
-        let dir = tempfile::tempdir().unwrap();
-        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
-        let header = header(1);
-        let written = records(&header, &[(0, true), (1, true)]);
+        let (_dir, path, data, header, written) = scene(1, &[(0, true), (1, true)]);
         write_journal(&path, &data, &header, &written[..1]);
         let first = std::fs::metadata(&path).unwrap().len() as usize;
         write_journal(&path, &data, &header, &written);
@@ -657,10 +669,7 @@ mod tests {
 
     #[test]
     fn a_chunk_that_changed_in_the_data_file_is_not_loaded() {
-        let dir = tempfile::tempdir().unwrap();
-        let (path, data) = (dir.path().join("j"), dir.path().join("d"));
-        let header = header(3);
-        let written = records(&header, &[(0, true), (1, true)]);
+        let (_dir, path, data, header, written) = scene(3, &[(0, true), (1, true)]);
         write_journal(&path, &data, &header, &written);
         // One byte inside the second record's last chunk.
         let mut bytes = std::fs::read(&data).unwrap();
