@@ -237,6 +237,13 @@ fn run_command(args: RunArgs) -> Result<u8> {
             }
         );
     }
+    if summary.rerun > 0 {
+        eprintln!(
+            "studyrun: warning: {} cases of the journal were run again: their data were not \
+             found intact in the partial file",
+            summary.rerun
+        );
+    }
     Ok(if summary.failed > 0 {
         EXIT_CASES_FAILED
     } else {

@@ -300,7 +300,12 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
         "{}",
         String::from_utf8_lossy(&resumed.stderr)
     );
-    assert!(String::from_utf8_lossy(&resumed.stderr).contains("from the journal"));
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert!(stderr.contains("from the journal"), "{stderr}");
+    assert!(
+        !stderr.contains("run again"),
+        "every journaled case was found: {stderr}"
+    );
     for side in ["journal", "journal.new", "partial", "partial.resumed"] {
         assert!(
             !dir.path().join(format!("long.h5.{side}")).exists(),
@@ -396,4 +401,33 @@ fn accuracy_measures_only_the_chosen_methods() {
         stderr.contains("possible values: dopri5, tsit5, dop853, sdirk4, rk4"),
         "{stderr}"
     );
+}
+
+/// A directory where the result file should go is refused before anything runs, with
+/// or without `--force`, and nothing is left beside it.
+#[test]
+fn a_directory_as_the_result_file_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "small.yaml",
+        "name: small\nduration: 0.05\nsample_rate: 10000\ngrid:\n  rpm: [300, 600]\n",
+    );
+    std::fs::create_dir(dir.path().join("out.h5")).unwrap();
+    for force in [false, true] {
+        let mut args = vec!["small.yaml", "-o", "out.h5", "-q"];
+        if force {
+            args.push("--force");
+        }
+        let out = studyrun(dir.path(), &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "force {force}");
+        assert!(
+            err.contains("out.h5") && err.contains("directory"),
+            "force {force}: {err}"
+        );
+        for side in ["journal", "partial"] {
+            assert!(!dir.path().join(format!("out.h5.{side}")).exists());
+        }
+    }
 }

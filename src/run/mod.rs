@@ -101,6 +101,9 @@ pub struct RunSummary {
     pub failed: usize,
     /// Cases taken from the journal of an interrupted run.
     pub resumed: usize,
+    /// Cases the journal of an interrupted run recorded but whose chunks were not
+    /// found intact in its partial file: run again.
+    pub rerun: usize,
     /// Wall-clock time (s).
     pub wall_time: f64,
     /// Where the CPU time went and whether the workers waited for the writer.
@@ -121,6 +124,13 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
     s.push(suffix);
     PathBuf::from(s)
+}
+
+/// What a scoped thread returned; its panic goes on in this thread.
+fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    handle
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }
 
 /// Removes the file at `path` if there is one.
@@ -171,10 +181,14 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     }
     let (journal_path, _) = side_paths(&opts.output);
     let new_journal_path = with_suffix(&journal_path, ".new");
-    // With `--force` the old result file is removed on a thread of its own (unlinking
-    // a large file takes milliseconds the run need not wait for); the final rename
-    // waits for it.
-    let removing_output = if opts.force {
+    if opts.output.is_dir() {
+        bail!(
+            "{} is a directory; give the result file's path",
+            opts.output.display()
+        );
+    }
+    // With `--force` the old result file is removed while the file is created (below).
+    if opts.force {
         let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(&opts.output));
         for p in [&journal_path, &new_journal_path]
             .into_iter()
@@ -182,8 +196,6 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         {
             remove_if_exists(p)?;
         }
-        let output = opts.output.clone();
-        Some(std::thread::spawn(move || remove_if_exists(&output)))
     } else if opts.output.exists() {
         bail!(
             "{} exists; use --force to overwrite it",
@@ -199,9 +211,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             "nothing to resume: {} does not exist",
             journal_path.display()
         );
-    } else {
-        None
-    };
+    }
 
     let layout = study_layout(study, &rows)?;
     let header = JournalHeader {
@@ -226,17 +236,20 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         .as_ref()
         .map_or(DataFile::Partial, |r| r.data_file().other());
     let partial_path = data.path(&opts.output);
-    // The ideal references run while the file is created.
+    // The ideal references run, and with `--force` the old result file is unlinked
+    // (milliseconds for a large file), while the file is created; both are done
+    // before the journal exists, so a kill cannot leave a journal beside an old result.
     let cpu = thread_cpu();
-    let (references, writer) = std::thread::scope(|scope| {
+    let (references, writer, removed) = std::thread::scope(|scope| {
         let references = scope.spawn(|| run_references(study));
+        let removed = opts
+            .force
+            .then(|| scope.spawn(|| remove_if_exists(&opts.output)));
         let writer = StudyWriter::create(&partial_path, &layout)
             .with_context(|| format!("cannot create {}", partial_path.display()));
-        let references = references
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (references, writer)
+        (joined(references), writer, removed.map_or(Ok(()), joined))
     });
+    removed?;
     let (references, mut writer) = (references?, writer?);
     for (k, r) in references.iter().enumerate() {
         let series: Vec<&[f64]> = REFERENCE_CHANNELS
@@ -248,7 +261,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
 
     // Replay what an interrupted run finished (see the journal module: the old files
     // are only read, the new journal replaces the old one once it holds them all).
-    let mut done = HashSet::new();
+    let (mut done, mut journaled) = (HashSet::new(), HashSet::new());
     let (mut ok, mut failed) = (0usize, 0usize);
     let mut journal = if let Some(mut reader) = reader {
         let old = reader.data_file().path(&opts.output);
@@ -265,6 +278,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             if entry.row() >= rows.len() || done.contains(&entry.row()) {
                 continue;
             }
+            journaled.insert(entry.row());
             // A case whose chunks are not intact in the old file is run again.
             let Some(rec) = entry.load(&old_data) else {
                 continue;
@@ -371,11 +385,6 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     stats.finish = thread_cpu() - cpu;
     stats.sends = received as u64;
     tally.add_to(&mut stats);
-    if let Some(removing) = removing_output {
-        removing
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
-    }
     std::fs::rename(&partial_path, &opts.output).with_context(|| {
         format!(
             "cannot rename {} to {}",
@@ -391,6 +400,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         ok,
         failed,
         resumed,
+        rerun: journaled.len() - resumed,
         wall_time: start.elapsed().as_secs_f64(),
         stats,
     })
