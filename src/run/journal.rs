@@ -116,12 +116,13 @@ pub enum DataFile {
 impl DataFile {
     /// The partial file of this name for the result file `output`.
     pub fn path(self, output: &Path) -> PathBuf {
-        let mut s = output.as_os_str().to_owned();
-        s.push(match self {
-            Self::Partial => ".partial",
-            Self::Resumed => ".partial.resumed",
-        });
-        PathBuf::from(s)
+        with_suffix(
+            output,
+            match self {
+                Self::Partial => ".partial",
+                Self::Resumed => ".partial.resumed",
+            },
+        )
     }
 
     /// The other partial file: where a run resumed from this one writes.
@@ -144,6 +145,13 @@ impl DataFile {
             .into_iter()
             .find(|d| d.code() == code)
     }
+}
+
+/// `path` with `suffix` appended to its file name.
+pub(super) fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
 }
 
 /// FNV-1a, 64 bit: the study fingerprint.

@@ -119,13 +119,6 @@ pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
     )
 }
 
-/// `path` with `suffix` appended to its file name.
-fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(suffix);
-    PathBuf::from(s)
-}
-
 /// What a scoped thread returned; its panic goes on in this thread.
 fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
     handle
@@ -258,57 +251,23 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             .collect();
         writer.write_reference(k, &series)?;
     }
-
-    // Replay what an interrupted run finished (see the journal module: the old files
-    // are only read, the new journal replaces the old one once it holds them all).
-    let (mut done, mut journaled) = (HashSet::new(), HashSet::new());
-    let (mut ok, mut failed) = (0usize, 0usize);
-    let mut journal = if let Some(mut reader) = reader {
-        let old = reader.data_file().path(&opts.output);
-        let old_data = std::fs::File::open(&old).with_context(|| {
-            format!(
-                "cannot open {}, the partial file that holds the journal's cases; \
-                 run with --force to start over",
-                old.display()
-            )
-        })?;
-        let mut journal = JournalWriter::create(&new_journal_path, &header, data)
-            .with_context(|| format!("cannot create {}", new_journal_path.display()))?;
-        while let Some(entry) = reader.next_entry() {
-            if entry.row() >= rows.len() || done.contains(&entry.row()) {
-                continue;
-            }
-            journaled.insert(entry.row());
-            // A case whose chunks are not intact in the old file is run again.
-            let Some(rec) = entry.load(&old_data) else {
-                continue;
-            };
-            let before = rec.write_to(&mut writer)?;
-            journal
-                .write(&rec, before)
-                .with_context(|| format!("cannot append to {}", new_journal_path.display()))?;
-            done.insert(rec.row());
-            if rec.status() == Status::Ok {
-                ok += 1
-            } else {
-                failed += 1
-            }
-        }
-        std::fs::rename(&new_journal_path, &journal_path).with_context(|| {
-            format!(
-                "cannot rename {} to {}",
-                new_journal_path.display(),
-                journal_path.display()
-            )
-        })?;
-        drop(old_data);
-        std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
-        journal
-    } else {
-        JournalWriter::create(&journal_path, &header, data)
-            .with_context(|| format!("cannot create {}", journal_path.display()))?
-    };
     stats.create = thread_cpu() - cpu;
+
+    // Replay what an interrupted run finished.
+    let (mut journal, replayed) = match reader {
+        Some(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
+        None => (
+            JournalWriter::create(&journal_path, &header, data)
+                .with_context(|| format!("cannot create {}", journal_path.display()))?,
+            Replayed::default(),
+        ),
+    };
+    let Replayed {
+        done,
+        journaled,
+        mut ok,
+        mut failed,
+    } = replayed;
     let resumed = done.len();
     let pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
 
@@ -400,10 +359,82 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         ok,
         failed,
         resumed,
-        rerun: journaled.len() - resumed,
+        rerun: journaled - resumed,
         wall_time: start.elapsed().as_secs_f64(),
         stats,
     })
+}
+
+/// What a resumed run took over from the journal of the interrupted one.
+#[derive(Debug, Default)]
+struct Replayed {
+    /// Rows replayed into the new partial file.
+    done: HashSet<usize>,
+    /// Rows the journal recorded (some may not have been found intact).
+    journaled: usize,
+    /// Replayed cases that ran to the end.
+    ok: usize,
+    /// Replayed cases that failed.
+    failed: usize,
+}
+
+/// Replays the cases `reader`'s journal recorded below row `n_rows` into `writer` (the
+/// other partial file than the journal's, see [`DataFile`]) under a new journal, which
+/// then replaces the old one by an atomic rename; the old partial file is removed
+/// last. The old files are only read, so a kill at any moment leaves a journal whose
+/// partial file holds its cases. Returns the new journal, open for appending.
+fn replay(
+    mut reader: JournalReader,
+    output: &Path,
+    header: &JournalHeader,
+    writer: &mut StudyWriter,
+    n_rows: usize,
+) -> Result<(JournalWriter, Replayed)> {
+    let (journal_path, _) = side_paths(output);
+    let new_journal_path = with_suffix(&journal_path, ".new");
+    let old = reader.data_file().path(output);
+    let old_data = std::fs::File::open(&old).with_context(|| {
+        format!(
+            "cannot open {}, the partial file that holds the journal's cases; \
+             run with --force to start over",
+            old.display()
+        )
+    })?;
+    let mut journal = JournalWriter::create(&new_journal_path, header, reader.data_file().other())
+        .with_context(|| format!("cannot create {}", new_journal_path.display()))?;
+    let mut journaled = HashSet::new();
+    let mut replayed = Replayed::default();
+    while let Some(entry) = reader.next_entry() {
+        if entry.row() >= n_rows || replayed.done.contains(&entry.row()) {
+            continue;
+        }
+        journaled.insert(entry.row());
+        // A case whose chunks are not intact in the old file is run again.
+        let Some(rec) = entry.load(&old_data) else {
+            continue;
+        };
+        let before = rec.write_to(writer)?;
+        journal
+            .write(&rec, before)
+            .with_context(|| format!("cannot append to {}", new_journal_path.display()))?;
+        replayed.done.insert(rec.row());
+        if rec.status() == Status::Ok {
+            replayed.ok += 1
+        } else {
+            replayed.failed += 1
+        }
+    }
+    replayed.journaled = journaled.len();
+    std::fs::rename(&new_journal_path, &journal_path).with_context(|| {
+        format!(
+            "cannot rename {} to {}",
+            new_journal_path.display(),
+            journal_path.display()
+        )
+    })?;
+    drop(old_data);
+    std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
+    Ok((journal, replayed))
 }
 
 /// Sends `record` to the writer; a send that finds the channel full (the writer is
@@ -421,5 +452,6 @@ fn send<T>(tx: &SyncSender<T>, record: T, tally: &WorkerTally) -> Result<(), Sen
     }
 }
 
+use journal::with_suffix;
 use progress::Progress;
 use stats::{thread_cpu, WorkerTally};
