@@ -1,7 +1,8 @@
 //! Running a study: cases in parallel (rayon), one writer (the HDF5 library is not
 //! thread-safe), bounded memory, a crash journal, resume, shards and merging.
 //!
-//! Data flow: workers simulate cases, compute spectra and metrics, encode the series
+//! Data flow: workers (a rayon pool) take cases one at a time, the costliest first
+//! ([`order`]), simulate them, compute spectra and metrics, encode the series
 //! and spectra into the chunks the file stores (float32 conversion, shuffle, deflate)
 //! with their checksums ([`JournalRecord::encode`]), and send the records through a
 //! bounded channel; the calling thread copies each case's chunks into `OUT.h5.partial`
@@ -16,6 +17,7 @@ mod inspect;
 mod journal;
 mod layout;
 mod merge;
+mod order;
 mod progress;
 mod stats;
 
@@ -31,6 +33,7 @@ pub use stats::RunStats;
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, SendError, SyncSender, TrySendError};
 use std::time::Instant;
 
@@ -269,7 +272,8 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         mut failed,
     } = replayed;
     let resumed = done.len();
-    let pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
+    let mut pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
+    dispatch_order(study, &rows, &mut pending);
 
     let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -286,28 +290,29 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let received = std::thread::scope(|scope| -> Result<usize> {
         // The workers own the sender: when they end, normally or not, the channel closes.
         scope.spawn(move || {
-            pool.install(|| {
-                pending.par_iter().try_for_each_init(
-                    || {
-                        let plan = SpectrumPlan::new(n_window, window)
-                            .expect("window length checked by the layout");
-                        (plan, ChunkEncoder::new(storage))
-                    },
-                    |(plan, encoder), &row| {
-                        let case = &study.cases[rows_ref[row]];
-                        let result =
-                            run_case(study, row, &case.params, &refs[case.reference], plan);
-                        let cpu = thread_cpu();
-                        let record = Box::new(JournalRecord::encode(&result, encoder));
-                        tally_ref.case(
-                            result.cost.simulate,
-                            result.cost.analysis,
-                            thread_cpu() - cpu,
-                        );
-                        send(&tx, record, tally_ref)
-                    },
-                )
-            })
+            // Every worker takes the next case of `pending` until none is left or the
+            // writer is gone.
+            let next = AtomicUsize::new(0);
+            pool.broadcast(|_| {
+                let mut plan = SpectrumPlan::new(n_window, window)
+                    .expect("window length checked by the layout");
+                let mut encoder = ChunkEncoder::new(storage);
+                while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let case = &study.cases[rows_ref[row]];
+                    let result =
+                        run_case(study, row, &case.params, &refs[case.reference], &mut plan);
+                    let cpu = thread_cpu();
+                    let record = Box::new(JournalRecord::encode(&result, &mut encoder));
+                    tally_ref.case(
+                        result.cost.simulate,
+                        result.cost.analysis,
+                        thread_cpu() - cpu,
+                    );
+                    if send(&tx, record, tally_ref).is_err() {
+                        break;
+                    }
+                }
+            });
         });
         let mut received = 0;
         // `rx` is consumed: if this loop stops early (an error), the channel closes and
@@ -453,5 +458,6 @@ fn send<T>(tx: &SyncSender<T>, record: T, tally: &WorkerTally) -> Result<(), Sen
 }
 
 use journal::with_suffix;
+use order::dispatch_order;
 use progress::Progress;
 use stats::{thread_cpu, WorkerTally};
