@@ -49,6 +49,7 @@ mod encode;
 mod error;
 mod layout;
 mod reader;
+mod reserve;
 mod shuffle;
 pub mod spectrum;
 mod writer;

@@ -18,6 +18,7 @@ use super::layout::{
     FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
 };
 use super::reader::read_layout;
+use super::reserve::Reservation;
 
 /// One finished (or failed) case, borrowed from the caller.
 ///
@@ -114,6 +115,8 @@ pub struct StudyWriter {
     /// The chunk being written from values, reused.
     chunk: Vec<u8>,
     scalars: Scalars,
+    /// Disk blocks reserved for the chunks [`StudyWriter::write_encoded`] appends.
+    reservation: Reservation,
 }
 
 /// Upper bound of HDF5's metadata cache for a written file (bytes, as HDF5 counts
@@ -275,6 +278,7 @@ impl StudyWriter {
         }
         let scalars = Scalars::read(&rows, &layout, &path)?;
         Ok(Self {
+            reservation: Reservation::new(&path),
             path,
             file,
             encoder: ChunkEncoder::new(layout.storage),
@@ -325,13 +329,17 @@ impl StudyWriter {
 
     /// Writes `record`, whose series and spectra are stored chunks made by a
     /// [`ChunkEncoder`] for this file's storage, into row `row` like
-    /// [`StudyWriter::write_case`]: the chunks go into the file unchanged.
+    /// [`StudyWriter::write_case`]: the chunks go into the file unchanged, into disk
+    /// blocks reserved ahead of them (`fallocate` where the system has it).
     pub fn write_encoded(
         &mut self,
         row: usize,
         record: &EncodedRecord<'_>,
     ) -> Result<(), StudyFileError> {
         self.check_case(row, record)?;
+        let bytes = record.series.iter().chain(record.spectra).map(|c| c.len());
+        self.reservation
+            .ahead(self.file_len(), bytes.sum::<usize>() as u64);
         for (chunk, ds, spec) in case_arrays(&self.rows, &self.layout, record) {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
@@ -413,7 +421,8 @@ impl StudyWriter {
         self.file.flush().at(&self.path, "/")
     }
 
-    /// Flushes and closes the file, reporting errors that dropping would hide.
+    /// Flushes and closes the file, reporting errors that dropping would hide, and
+    /// releases the disk blocks reserved past its end.
     pub fn finish(mut self) -> Result<(), StudyFileError> {
         self.flush()?;
         let Self {
@@ -421,11 +430,17 @@ impl StudyWriter {
             file,
             rows,
             scalars,
+            reservation,
             ..
         } = self;
         drop(scalars);
         drop(rows);
-        file.close().at(&path, "/")
+        file.close().at(&path, "/")?;
+        reservation.release().map_err(|source| StudyFileError::Io {
+            path,
+            action: "release the disk blocks reserved past the end of",
+            source,
+        })
     }
 
     /// Checks a record's list of rows against the layout's variables: empty, or one
