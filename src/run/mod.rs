@@ -287,6 +287,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
     let tally = WorkerTally::default();
     let n_pending = pending.len();
     let (rows_ref, refs, tally_ref) = (&rows, &references, &tally);
+    stats.startup = start.elapsed().as_secs_f64();
     let received = std::thread::scope(|scope| -> Result<usize> {
         // The workers own the sender: when they end, normally or not, the channel closes.
         scope.spawn(move || {
@@ -312,6 +313,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
                         break;
                     }
                 }
+                tally_ref.out_of_cases(start.elapsed());
             });
         });
         let mut received = 0;

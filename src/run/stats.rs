@@ -50,6 +50,12 @@ pub struct RunStats {
     pub raw_bytes: u64,
     /// Bytes of the chunks written for them (after float32 conversion and deflate).
     pub stored_bytes: u64,
+    /// Wall-clock time from the start of the run to the workers' start (s): file
+    /// creation, the ideal references and any resume replay.
+    pub startup: f64,
+    /// Wall-clock time the workers sat idle at the end, summed over the workers (s):
+    /// from the moment each found no case left to the end of the last case.
+    pub tail_idle: f64,
 }
 
 impl RunStats {
@@ -104,10 +110,16 @@ impl std::fmt::Display for RunStats {
             self.raw_bytes as f64 / 1e6,
             self.raw_bytes as f64 / (self.stored_bytes.max(1) as f64)
         )?;
-        write!(
+        writeln!(
             f,
             "channel: {} sends, {} found it full ({:.3} s waiting)",
             self.sends, self.blocked_sends, self.send_wait
+        )?;
+        write!(
+            f,
+            "wall: workers started after {:.1} ms; idle at the end {:.1} ms (summed over workers)",
+            1e3 * self.startup,
+            1e3 * self.tail_idle
         )
     }
 }
@@ -120,6 +132,11 @@ pub(super) struct WorkerTally {
     encode_ns: AtomicU64,
     blocked_sends: AtomicU64,
     send_wait_ns: AtomicU64,
+    /// Over the workers, the sum and the latest of the moments each found no case
+    /// left (ns since the run's start), and the number of workers.
+    out_of_cases_ns: AtomicU64,
+    last_out_of_cases_ns: AtomicU64,
+    workers: AtomicU64,
 }
 
 /// Seconds as whole nanoseconds, for the atomic tallies.
@@ -144,13 +161,55 @@ impl WorkerTally {
             .fetch_add(waited.as_nanos() as u64, Ordering::Relaxed);
     }
 
+    /// A worker found no case left, `at` after the run's start.
+    pub(super) fn out_of_cases(&self, at: Duration) {
+        let at = at.as_nanos() as u64;
+        self.out_of_cases_ns.fetch_add(at, Ordering::Relaxed);
+        self.last_out_of_cases_ns.fetch_max(at, Ordering::Relaxed);
+        self.workers.fetch_add(1, Ordering::Relaxed);
+    }
+
     /// Adds the tallies into `stats`.
     pub(super) fn add_to(&self, stats: &mut RunStats) {
+        let workers = self.workers.load(Ordering::Relaxed);
+        let last = self.last_out_of_cases_ns.load(Ordering::Relaxed);
+        let sum = self.out_of_cases_ns.load(Ordering::Relaxed);
+        stats.tail_idle += (workers * last).saturating_sub(sum) as f64 * 1e-9;
         let s = |a: &AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
         stats.simulate += s(&self.simulate_ns);
         stats.analysis += s(&self.analysis_ns);
         stats.encode += s(&self.encode_ns);
         stats.blocked_sends += self.blocked_sends.load(Ordering::Relaxed);
         stats.send_wait += s(&self.send_wait_ns);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tail_idle_sums_each_workers_wait_for_the_last() {
+        let tally = WorkerTally::default();
+        for ms in [25, 10, 19] {
+            tally.out_of_cases(Duration::from_millis(ms));
+        }
+        let mut stats = RunStats::default();
+        tally.add_to(&mut stats);
+        // (25 - 25) + (25 - 10) + (25 - 19) ms.
+        assert!(
+            (stats.tail_idle - 0.021).abs() < 1e-12,
+            "{}",
+            stats.tail_idle
+        );
+    }
+
+    #[test]
+    fn one_worker_never_waits_at_the_end() {
+        let tally = WorkerTally::default();
+        tally.out_of_cases(Duration::from_millis(640));
+        let mut stats = RunStats::default();
+        tally.add_to(&mut stats);
+        assert_eq!(stats.tail_idle, 0.0);
     }
 }
