@@ -60,17 +60,6 @@ pub enum StudyFileError {
         /// What does not fit.
         reason: String,
     },
-    /// A file-system call on the file failed.
-    #[error("cannot {action} {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What was being done, as a verb phrase taking the file as its object.
-        action: &'static str,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
     /// The file is not a study file of this version, or its content is inconsistent.
     #[error("{path}: variable `{variable}`: not a readable study file: {reason}")]
     Format {

@@ -11,21 +11,27 @@
 //! crash journal records, and what readers see). Blocks left over past the end are
 //! released when the file is finished.
 //!
-//! A reservation is only a hint: where `fallocate` is missing or refuses (another
-//! operating system, a file system without it, a full disk), nothing is reserved and
-//! the writes that follow allocate their blocks, or report the full disk, as before.
+//! A reservation is only a hint, and never takes the disk from anything else: each
+//! step is at most a quarter of the space left on the file system, and where
+//! `fallocate` is missing or refuses (another operating system, a file system without
+//! it, a full disk), whatever it allocated is released at once, nothing more is
+//! reserved, and the writes that follow allocate their blocks, or report the full
+//! disk, as they would without it. Dropping the writer without finishing the file
+//! (an error) releases the reserved blocks too; only a killed run leaves them, past
+//! the end of its partial file, until `--resume` or `--force` removes that file.
 
 use std::fs::{File, OpenOptions};
 use std::path::Path;
 
-/// Bytes reserved at a time (past the end of what the chunks about to be written
-/// need).
+/// Most bytes reserved at a time, past the end of what the chunks about to be
+/// written need.
 pub const STEP: u64 = 64 << 20;
 
-/// Blocks reserved past the end of one file.
+/// Blocks reserved past the end of one file; released when dropped.
 #[derive(Debug)]
 pub(super) struct Reservation {
-    /// The file, opened for writing (none where it could not be).
+    /// The file, opened for writing (none where it could not be, or once a
+    /// reservation failed).
     file: Option<File>,
     /// End of the space reserved so far (bytes from the start of the file).
     end: u64,
@@ -41,31 +47,38 @@ impl Reservation {
     }
 
     /// Makes sure the blocks of `[len, len + bytes)` are reserved, `len` being the
-    /// file's size now: if they are not, reserves them and [`STEP`] beyond.
+    /// file's size now: if they are not, reserves them and up to [`STEP`] beyond.
     pub(super) fn ahead(&mut self, len: u64, bytes: u64) {
-        let need = len + bytes;
-        if need <= self.end {
+        let need = len.saturating_add(bytes);
+        let Some(file) = self.file.as_ref().filter(|_| need > self.end) else {
             return;
-        }
+        };
         let from = self.end.max(len);
-        if let Some(file) = &self.file {
-            if keep_size_fallocate(file, from, need - from + STEP) {
-                self.end = need + STEP;
-                return;
-            }
+        let step = STEP.min(available_bytes(file) / 4);
+        if keep_size_fallocate(file, from, need - from + step) {
+            self.end = need + step;
+        } else {
+            // A refused request may still have allocated part of the range.
+            self.release();
         }
-        // Never ask again.
-        self.file = None;
-        self.end = u64::MAX;
     }
 
-    /// Releases the blocks reserved past the end of the file, once it is closed:
-    /// truncating a file to its own size frees the blocks past its end.
-    pub(super) fn release(self) -> std::io::Result<()> {
-        match self.file {
-            Some(file) => file.set_len(file.metadata()?.len()),
-            None => Ok(()),
+    /// Releases the blocks reserved past the end of the file and reserves nothing
+    /// more: truncating a file to its own size frees the blocks past its end. Best
+    /// effort: where that fails, the blocks stay allocated (and are freed with the
+    /// file).
+    fn release(&mut self) {
+        if let Some(file) = self.file.take() {
+            if let Ok(meta) = file.metadata() {
+                let _ = file.set_len(meta.len());
+            }
         }
+    }
+}
+
+impl Drop for Reservation {
+    fn drop(&mut self) {
+        self.release();
     }
 }
 
@@ -74,7 +87,7 @@ impl Reservation {
 #[cfg(target_os = "linux")]
 fn keep_size_fallocate(file: &File, offset: u64, len: u64) -> bool {
     use std::os::fd::AsRawFd;
-    let (Ok(offset), Ok(len)) = (i64::try_from(offset), i64::try_from(len)) else {
+    let (Ok(offset), Ok(len)) = (libc::off_t::try_from(offset), libc::off_t::try_from(len)) else {
         return false;
     };
     // SAFETY: the descriptor is open for writing for the duration of the call, which
@@ -86,6 +99,26 @@ fn keep_size_fallocate(file: &File, offset: u64, len: u64) -> bool {
 #[cfg(not(target_os = "linux"))]
 fn keep_size_fallocate(_: &File, _: u64, _: u64) -> bool {
     false
+}
+
+/// Bytes an unprivileged process may still allocate on `file`'s file system (0 where
+/// that cannot be told).
+#[cfg(target_os = "linux")]
+fn available_bytes(file: &File) -> u64 {
+    use std::os::fd::AsRawFd;
+    // SAFETY: an all-zero statvfs is a valid value of this plain C struct.
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: the descriptor is open and `st` is valid for writing.
+    if unsafe { libc::fstatvfs(file.as_raw_fd(), &mut st) } != 0 {
+        return 0;
+    }
+    (st.f_bavail as u64).saturating_mul(st.f_frsize as u64)
+}
+
+/// Nothing is reserved here.
+#[cfg(not(target_os = "linux"))]
+fn available_bytes(_: &File) -> u64 {
+    0
 }
 
 #[cfg(test)]
@@ -108,16 +141,16 @@ mod tests {
         let mut r = Reservation::new(&path);
         r.ahead(1000, 5000);
         assert_eq!(std::fs::metadata(&path).unwrap().len(), 1000, "size kept");
-        if cfg!(target_os = "linux") && r.file.is_some() {
-            assert!(allocated(&path) >= 6000 + STEP, "{}", allocated(&path));
+        if r.file.is_some() {
+            assert!(r.end >= 6000, "reserved to {}", r.end);
+            // Within the reservation: nothing more is asked.
+            let end = r.end;
+            r.ahead(4000, 1000);
+            assert_eq!(r.end, end);
         }
-        // Within the reservation: nothing more is asked.
-        let end = r.end;
-        r.ahead(4000, 1000);
-        assert_eq!(r.end, end);
         f.write_all(&[8; 5000]).unwrap();
         drop(f);
-        r.release().unwrap();
+        drop(r);
         assert_eq!(std::fs::read(&path).unwrap().len(), 6000, "data kept");
         assert!(
             allocated(&path) < 1 << 20,
@@ -127,12 +160,28 @@ mod tests {
     }
 
     #[test]
+    fn a_refused_reservation_is_released_and_not_asked_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f.bin");
+        std::fs::write(&path, [7; 1000]).unwrap();
+        let mut r = Reservation::new(&path);
+        r.ahead(1000, 5000);
+        // Past what an offset can express: refused before any system call, like a
+        // full disk.
+        r.ahead(u64::MAX / 2, u64::MAX / 2);
+        assert!(r.file.is_none(), "no more reservations");
+        assert!(allocated(&path) < 1 << 20, "{}", allocated(&path));
+        assert_eq!(std::fs::read(&path).unwrap(), [7; 1000]);
+        r.ahead(0, 1 << 40);
+        assert!(allocated(&path) < 1 << 20);
+    }
+
+    #[test]
     fn a_file_that_cannot_be_opened_reserves_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let mut r = Reservation::new(&dir.path().join("missing.bin"));
         r.ahead(0, 100);
-        assert_eq!(r.end, u64::MAX);
-        r.ahead(1 << 40, 100);
-        r.release().unwrap();
+        assert_eq!(r.end, 0);
+        assert!(!dir.path().join("missing.bin").exists());
     }
 }

@@ -13,10 +13,10 @@ use crate::study::Study;
 /// Orders `pending` (positions in `rows`, which index `study.cases`) for the workers:
 /// the most crank revolutions first (every case of a study simulates the same time,
 /// and contacts, load-zone passes and waviness passes come per revolution, so the
-/// integrator's steps grow with the speed), ties in reverse grid order (grids list
-/// their values in ascending order, and the cost grows with the speed, the waviness
-/// amplitude and the bearing's load at crank_rod, so the costly cases of a grid tend
-/// to come last).
+/// integrator's steps grow with the speed), ties in reverse grid order. The tie rule
+/// assumes what is usual, not required: that a grid lists its values in ascending
+/// order, so that its costly cases (higher speed, larger waviness amplitude, more
+/// balls; the bearing at crank_rod, listed after crank_ground) tend to come last.
 pub(super) fn dispatch_order(study: &Study, rows: &[usize], pending: &mut [usize]) {
     let rpm = |position: usize| study.cases[rows[position]].params.rpm;
     pending.sort_by(|&a, &b| rpm(b).total_cmp(&rpm(a)).then(b.cmp(&a)));
