@@ -452,7 +452,7 @@ fn chunks_lie_after_the_file_length_before_their_write() {
             message: "",
         };
         let before = writer.file_len();
-        writer.write_encoded(row, &record).unwrap();
+        assert_eq!(writer.write_encoded(row, &record).unwrap(), before);
         written.push((before, chunks));
         // Every case written so far, in the file as it is now.
         let file = std::fs::read(&path).unwrap();

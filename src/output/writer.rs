@@ -330,22 +330,24 @@ impl StudyWriter {
     /// Writes `record`, whose series and spectra are stored chunks made by a
     /// [`ChunkEncoder`] for this file's storage, into row `row` like
     /// [`StudyWriter::write_case`]: the chunks go into the file unchanged, into disk
-    /// blocks reserved ahead of them (`fallocate` where the system has it).
+    /// blocks reserved ahead of them (`fallocate` where the system has it). Returns
+    /// the file's length before they were written ([`StudyWriter::file_len`]): the
+    /// chunks follow it, which is what a crash journal records to find them again.
     pub fn write_encoded(
         &mut self,
         row: usize,
         record: &EncodedRecord<'_>,
-    ) -> Result<(), StudyFileError> {
+    ) -> Result<u64, StudyFileError> {
         self.check_case(row, record)?;
+        let before = self.file_len();
         let bytes = record.series.iter().chain(record.spectra).map(|c| c.len());
-        self.reservation
-            .ahead(self.file_len(), bytes.sum::<usize>() as u64);
+        self.reservation.ahead(before, bytes.sum::<usize>() as u64);
         for (chunk, ds, spec) in case_arrays(&self.rows, &self.layout, record) {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
         self.scalars
             .set(row, record.metrics, record.status, record.message);
-        Ok(())
+        Ok(before)
     }
 
     /// The file's size (bytes: HDF5's end of allocated space, or the end of the file

@@ -26,7 +26,8 @@
 //! A case's chunks reach the writer thread in a [`JournalRecord`]: a worker encodes the
 //! series and spectra into the chunks the study file stores ([`ChunkEncoder`]) and
 //! checksums each. The writer thread hands the chunks to HDF5's direct chunk write,
-//! asks HDF5 where they went, and appends the record ([`JournalWriter::write`]).
+//! which says the file's length before them, and appends the record with that length
+//! ([`JournalWriter::write`]).
 //!
 //! Format: a header (magic, fingerprint of the study, array sizes, storage, the partial
 //! file), then records `[b"CASE", row u64, status i8, message length u32, message
@@ -247,7 +248,6 @@ impl JournalRecord {
     /// Writes the case into the study file (its chunks go in unchanged) and returns
     /// the file's length before, for [`JournalWriter::write`].
     pub fn write_to(&self, writer: &mut StudyWriter) -> Result<u64, StudyFileError> {
-        let before = writer.file_len();
         let chunks: Vec<&[u8]> = self.chunks.iter().map(|c| &self.bytes[c.clone()]).collect();
         let (series, spectra) = chunks.split_at(self.n_series);
         writer.write_encoded(
@@ -259,8 +259,7 @@ impl JournalRecord {
                 status: self.status,
                 message: &self.message,
             },
-        )?;
-        Ok(before)
+        )
     }
 }
 

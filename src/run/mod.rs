@@ -122,6 +122,11 @@ pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
     )
 }
 
+/// Where a resume writes the journal that replaces `output`'s (`OUT.h5.journal.new`).
+fn new_journal_path(output: &Path) -> PathBuf {
+    with_suffix(output, ".journal.new")
+}
+
 /// What a scoped thread returned; its panic goes on in this thread.
 fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
     handle
@@ -176,7 +181,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         );
     }
     let (journal_path, _) = side_paths(&opts.output);
-    let new_journal_path = with_suffix(&journal_path, ".new");
+    let new_journal_path = new_journal_path(&opts.output);
     if opts.output.is_dir() {
         bail!(
             "{} is a directory; give the result file's path",
@@ -398,7 +403,7 @@ fn replay(
     n_rows: usize,
 ) -> Result<(JournalWriter, Replayed)> {
     let (journal_path, _) = side_paths(output);
-    let new_journal_path = with_suffix(&journal_path, ".new");
+    let new_journal_path = new_journal_path(output);
     let old = reader.data_file().path(output);
     let old_data = std::fs::File::open(&old).with_context(|| {
         format!(
