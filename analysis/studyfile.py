@@ -9,7 +9,10 @@ Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
 
+import glob
 import math
+import os
+
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -35,6 +38,113 @@ def open_study(path):
     dataset (or use it in a `with` block) when done; `.load()` reads it all.
     """
     return xr.open_dataset(path, engine="h5netcdf")
+
+
+def _has_dask():
+    try:
+        import dask  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _same(a, b):
+    """Attribute values equal (arrays element-wise, NaN equal to NaN)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        if a.shape != b.shape or a.dtype.kind != b.dtype.kind:
+            return False
+        return bool(np.array_equal(a, b, equal_nan=a.dtype.kind in "fc"))
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    return type(a) is type(b) and a == b
+
+
+def _combine_shard_attrs(attrs_list, context=None):
+    """Attributes of the shards combined: kept where every shard has the same value,
+    `history` the shards' distinct lines in order, the rest (`created`, `file_cases`,
+    ...) dropped. Raises ValueError if `study_fingerprint` differs (other studies)."""
+    fingerprints = {str(a["study_fingerprint"]) for a in attrs_list if "study_fingerprint" in a}
+    if len(fingerprints) > 1:
+        raise ValueError(
+            f"the files are shards of different studies (study_fingerprint {sorted(fingerprints)})"
+        )
+    keys = list(dict.fromkeys(k for a in attrs_list for k in a))
+    out = {}
+    for key in keys:
+        values = [a[key] for a in attrs_list if key in a]
+        if key == "history":
+            lines = (line for v in values for line in str(v).splitlines() if line.strip())
+            out[key] = "\n".join(dict.fromkeys(lines))
+        elif len(values) == len(attrs_list) and all(_same(values[0], v) for v in values[1:]):
+            out[key] = values[0]
+    return out
+
+
+def open_shards(paths, lazy=None):
+    """Open the shard files of one study (`studyrun ... --shard K/N`) as one Dataset
+    ordered by case id: the variables and values `studyrun merge` would write, without
+    writing a merged file.
+
+    `paths` is a list of files in any order, or a glob pattern (`"part*.h5"`). Variables
+    over `case` are concatenated and sorted by case id; the others (the `reference`
+    runs, `time`, `frequency`) must be the same in every shard and are kept once. Root
+    attributes that every shard has alike are kept, `history` holds the shards' lines,
+    and `file_cases` becomes the number of cases opened (`created` and other differing
+    attributes are dropped).
+
+    `lazy`: read the data on demand through dask (`xr.open_mfdataset`); the default is
+    to do so when dask is installed, else every shard is read into memory. Close the
+    result (or use it in a `with` block) when done.
+
+    Raises ValueError if no file matches, the files are shards of different studies
+    (`study_fingerprint`), a case id is in more than one file, or the reference runs,
+    times or frequencies differ between files.
+
+    (`xr.open_mfdataset(paths)` with its defaults fails on shards with "non monotonic
+    global index": shard K of N holds the ids K-1, K-1+N, ..., which interleave.)
+    """
+    if isinstance(paths, (str, os.PathLike)):
+        pattern = os.fspath(paths)
+        paths = sorted(glob.glob(pattern))
+        if not paths:
+            raise ValueError(f"no shard file matches {pattern!r}")
+    paths = [os.fspath(p) for p in paths]
+    if not paths:
+        raise ValueError("no shard files given")
+    if lazy is None:
+        lazy = _has_dask()
+    combine = dict(
+        concat_dim="case",
+        data_vars="minimal",
+        coords="minimal",
+        compat="equals",
+        join="exact",
+        combine_attrs=_combine_shard_attrs,
+    )
+    try:
+        if lazy:
+            ds = xr.open_mfdataset(paths, engine="h5netcdf", combine="nested", **combine)
+        else:
+            parts = []
+            for path in paths:
+                with xr.open_dataset(path, engine="h5netcdf") as part:
+                    parts.append(part.load())
+            ds = xr.combine_nested(parts, **combine)
+    except ValueError as e:
+        if "study_fingerprint" in str(e):
+            raise
+        raise ValueError(
+            f"the files are not shards of one study (times, frequencies or reference runs differ): {e}"
+        ) from e
+    ids, counts = np.unique(ds["case"].values, return_counts=True)
+    if (counts > 1).any():
+        ds.close()
+        raise ValueError(f"case ids in more than one file: {ids[counts > 1].tolist()}")
+    out = ds.sortby("case")
+    out.attrs["file_cases"] = np.int64(out.sizes["case"])
+    out.set_close(ds.close)
+    return out
 
 
 def grid_axes(ds):

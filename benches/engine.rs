@@ -18,9 +18,9 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use studyrun::bearing::{BallSet, BearingParams, CageWeights, DampingModel, RaceWaviness};
-use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, SliderCrank};
+use studyrun::numeric::simd::Isa;
 use studyrun::output::{ChunkEncoder, Storage};
-use studyrun::simd::Isa;
 use studyrun::simulate::{simulate, Sampling};
 use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
@@ -155,7 +155,7 @@ fn rhs(c: &mut Criterion) {
     let mut group = c.benchmark_group("rhs");
     for location in [Location::CrankGround, Location::CrankRod] {
         for scene in SCENES {
-            let mut mech = MinimalSliderCrank::new(&case(location, scene)).unwrap();
+            let mut mech = SliderCrank::new(&case(location, scene)).unwrap();
             let y0 = mech.initial_state();
             let y = state_at_50ms(&mut mech, &y0);
             let mut dydt = vec![0.0; y.len()];
@@ -175,7 +175,7 @@ fn rhs(c: &mut Criterion) {
                 });
             }
         }
-        let mut mech = SliderCrank::new(&paper_case(location)).unwrap();
+        let mut mech = CartesianSliderCrank::new(&paper_case(location)).unwrap();
         let y0 = mech.initial_state();
         let y = state_at_50ms(&mut mech, &y0);
         let mut dydt = vec![0.0; y.len()];
@@ -192,7 +192,7 @@ fn rhs(c: &mut Criterion) {
 /// One output sample of the paper case per location.
 fn sample(c: &mut Criterion) {
     for location in [Location::CrankGround, Location::CrankRod] {
-        let mut mech = MinimalSliderCrank::new(&paper_case(location)).unwrap();
+        let mut mech = SliderCrank::new(&paper_case(location)).unwrap();
         let y0 = mech.initial_state();
         let y = state_at_50ms(&mut mech, &y0);
         c.bench_function(&format!("sample/{location}"), |b| {

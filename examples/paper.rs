@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 use studyrun::bearing::RaceWaviness;
 use studyrun::mechanism::{CaseParams, Location};
-use studyrun::metrics::{default_window_start, vibration_metrics, VibrationMetrics};
+use studyrun::signal::metrics::{default_window_start, vibration_metrics, VibrationMetrics};
 use studyrun::simulate::{simulate, CaseOutput, Sampling};
 use studyrun::solve::{Method, SolverSettings};
 

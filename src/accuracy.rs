@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::metrics::{vibration_metrics, VibrationMetrics};
+use crate::signal::metrics::{vibration_metrics, VibrationMetrics};
 use crate::simulate::{simulate, CaseOutput};
 use crate::solve::{Method, SolverSettings};
 use crate::study::Study;
@@ -488,7 +488,7 @@ pub fn write_file(
         attributes,
         storage: Storage::default(),
     };
-    let (_, partial) = crate::run::side_paths(path);
+    let (_, partial) = crate::output::side_paths(path);
     let mut w = StudyWriter::create(&partial, &layout)?;
     for (row, m) in ms.iter().enumerate() {
         let mut values: Vec<f64> = (0..3)

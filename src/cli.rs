@@ -6,10 +6,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use studyrun::run::{self, RunOptions, Shard};
-use studyrun::simd::Isa;
+use studyrun::numeric::simd::Isa;
+use studyrun::output;
+use studyrun::run::{self, RunOptions};
 use studyrun::simulate::{simulate, Sampling, CHANNELS};
 use studyrun::study::params::lookup;
+use studyrun::study::Shard;
 use studyrun::study::{Study, StudyError};
 
 /// Exit code: every case ran to the end.
@@ -153,7 +155,7 @@ pub fn main() -> ExitCode {
             );
             EXIT_OK
         }),
-        Some(Command::Inspect { file }) => run::inspect(&file).map(|text| {
+        Some(Command::Inspect { file }) => output::inspect(&file).map(|text| {
             print!("{text}");
             EXIT_OK
         }),
@@ -169,7 +171,7 @@ pub fn main() -> ExitCode {
             output,
             shards,
             force,
-        }) => run::merge(&output, &shards, force).map(|n| {
+        }) => output::merge(&output, &shards, force).map(|n| {
             println!(
                 "merged {} shard files into {} ({n} cases)",
                 shards.len(),

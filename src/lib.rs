@@ -21,14 +21,12 @@
 pub mod accuracy;
 pub mod bearing;
 pub mod error;
-pub mod linalg;
 pub mod mechanism;
-pub mod metrics;
 pub mod multibody;
+pub mod numeric;
 pub mod output;
 pub mod run;
-pub mod simd;
+pub mod signal;
 pub mod simulate;
 pub mod solve;
 pub mod study;
-pub mod trig;

@@ -1,4 +1,4 @@
-//! Running one case: integrate a [`MinimalSliderCrank`] and sample the outputs of
+//! Running one case: integrate a [`SliderCrank`] and sample the outputs of
 //! MODEL.md §3 at exact, uniformly spaced sample times. The ideal mechanism has no
 //! state and is sampled in closed form, without an integrator.
 
@@ -6,7 +6,7 @@ use std::ops::Range;
 use std::time::Instant;
 
 use crate::error::ParamError;
-use crate::mechanism::{CaseParams, Location, MinimalSliderCrank, Sample};
+use crate::mechanism::{CaseParams, Location, Sample, SliderCrank};
 use crate::solve::{integrate, OdeSystem, SolveError, SolverSettings, Stats};
 
 /// Uniform output sampling: times `k / sample_rate` for `k = 0..=n` with
@@ -219,7 +219,7 @@ pub fn simulate(
 ) -> Result<CaseOutput, CaseError> {
     sampling.validate()?;
     let start = Instant::now();
-    let mut mech = MinimalSliderCrank::new(case)?;
+    let mut mech = SliderCrank::new(case)?;
     let times = sampling.times();
     // Each series gets its full length up front (`vec![v; n]` would clone `v`
     // without its capacity, and the series would grow by reallocation).
@@ -228,7 +228,7 @@ pub fn simulate(
         .map(|_| Vec::with_capacity(times.len()))
         .collect();
     let location = case.location;
-    let mut record = |m: &mut MinimalSliderCrank, t: f64, y: &[f64]| {
+    let mut record = |m: &mut SliderCrank, t: f64, y: &[f64]| {
         let s = m.sample(t, y)?;
         for (c, v) in channels.iter_mut().zip(channel_values(&s, location)) {
             c.push(v);

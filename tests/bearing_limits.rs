@@ -1,7 +1,7 @@
 //! Symmetry and limiting cases of the bearing force element.
 
 use studyrun::bearing::{BallBearing, BearingParams, Mounting};
-use studyrun::mechanism::{CaseParams, Location, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::multibody::{Body, BodyRef, ForceElement, System};
 use studyrun::solve::{integrate, Method, SolverSettings};
 
@@ -74,7 +74,7 @@ fn huge_clearance_carries_no_load() {
             ..CaseParams::default()
         };
         case.bearing.clearance = 0.015;
-        let mut mech = SliderCrank::new(&case).unwrap();
+        let mut mech = CartesianSliderCrank::new(&case).unwrap();
         let y0 = mech.initial_state();
         let times: Vec<f64> = (0..=100).map(|k| 0.002 * k as f64 / 100.0).collect();
         let settings = SolverSettings::new(Method::DormandPrince {
@@ -147,7 +147,7 @@ fn mechanism_without_contact_conserves_x_momentum() {
     let mut case = CaseParams::default();
     case.bearing.clearance = 0.015;
     let m = case.mechanism;
-    let mut mech = SliderCrank::new(&case).unwrap();
+    let mut mech = CartesianSliderCrank::new(&case).unwrap();
     let y0 = mech.initial_state();
     let times: Vec<f64> = (0..=100).map(|k| 0.01 * k as f64 / 100.0).collect();
     let settings = SolverSettings::new(Method::DormandPrince {

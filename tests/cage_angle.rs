@@ -2,13 +2,13 @@
 
 use studyrun::bearing::RaceWaviness;
 use studyrun::error::ModelError;
-use studyrun::mechanism::{CaseParams, Location, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
 /// The mechanism with one more state, `φ_int`, whose derivative is the rolling
 /// kinematics' cage speed ω_m = (d_i ω_i + d_o ω_o)/(d_i + d_o) (MODEL.md §2).
 struct WithCageQuadrature {
-    mech: SliderCrank,
+    mech: CartesianSliderCrank,
     d_i: f64,
     d_o: f64,
 }
@@ -49,7 +49,7 @@ fn closed_form_cage_angle_matches_integrated_cage_speed() {
         case.bearing.inner_race_diameter,
         case.bearing.outer_race_diameter,
     );
-    let mut mech = SliderCrank::new(&case).unwrap();
+    let mut mech = CartesianSliderCrank::new(&case).unwrap();
     let mut y0 = mech.initial_state();
     y0.push(0.0);
     let mut sys = WithCageQuadrature { mech, d_i, d_o };

@@ -1,7 +1,7 @@
 //! Constraint residuals over 20 revolutions at 600 rpm.
 
 use studyrun::bearing::RaceWaviness;
-use studyrun::mechanism::{CaseParams, Location, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::solve::{integrate, Method, SolverSettings};
 
 #[test]
@@ -14,7 +14,7 @@ fn residuals_stay_at_round_off_over_20_revolutions() {
         };
         case.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
         case.bearing.ball_count = 8;
-        let mut mech = SliderCrank::new(&case).unwrap();
+        let mut mech = CartesianSliderCrank::new(&case).unwrap();
         let y0 = mech.initial_state();
         let duration = 20.0 * 60.0 / case.rpm;
         let times: Vec<f64> = (0..=4000).map(|k| duration * k as f64 / 4000.0).collect();

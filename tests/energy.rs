@@ -1,13 +1,15 @@
 //! MODEL.md §8's energy balance: W_driver = ΔKE + ΔV − ∫∂V/∂t dt + E_dissipated.
 
 use studyrun::bearing::RaceWaviness;
-use studyrun::mechanism::{CaseParams, Location, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::solve::{integrate, Method, SolverSettings};
 
 /// Largest balance residual over the run, relative to the largest |driver work|
 /// reached during the run; also returns the dissipated energy and driver-work scale (J).
 fn balance(case: &CaseParams, revolutions: f64) -> (f64, f64, f64) {
-    let mut mech = SliderCrank::new(case).unwrap().with_energy_ledger(true);
+    let mut mech = CartesianSliderCrank::new(case)
+        .unwrap()
+        .with_energy_ledger(true);
     let y0 = mech.initial_state();
     let duration = revolutions * 60.0 / case.rpm;
     let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();

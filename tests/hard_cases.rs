@@ -38,8 +38,7 @@
 //! 0.8, 1.0, 1.5, 0.9, 6.7, 1.5, 9.5, 4.2, 5.9 and 1.3 s (37 s in all; ~25 s wall
 //! on 2 cores).
 
-#[path = "common/hard.rs"]
-mod hard;
+use crate::common::hard;
 
 use std::time::Instant;
 

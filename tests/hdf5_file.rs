@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use hdf5::filters::Filter;
-use studyrun::output::spectrum::{frequencies, SpectrumPlan, Window};
 use studyrun::output::{
     provenance, AttrValue, CaseRecord, ChunkEncoder, EncodedRecord, Layout, Param, ParamValues,
     Status, Storage, StudyFileError, StudyReader, StudyWriter, VarSpec,
 };
+use studyrun::signal::spectrum::{frequencies, SpectrumPlan, Window};
 use studyrun::simulate::CHANNELS;
 
 const N_TIME: usize = 1001;

@@ -1,18 +1,18 @@
 //! The ideal slider-crank at constant crank speed against closed forms.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
-use studyrun::mechanism::{CaseParams, Location, MechanismParams, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, MechanismParams};
 
-fn ideal(rpm: f64) -> (SliderCrank, MechanismParams, f64) {
+fn ideal(rpm: f64) -> (CartesianSliderCrank, MechanismParams, f64) {
     let case = CaseParams {
         location: Location::Ideal,
         rpm,
         ..CaseParams::default()
     };
     let w = case.omega();
-    (SliderCrank::new(&case).unwrap(), case.mechanism, w)
+    (CartesianSliderCrank::new(&case).unwrap(), case.mechanism, w)
 }
 
 /// Slider acceleration against the closed-form slider-crank formula, and the crank

@@ -8,13 +8,13 @@
 
 use proptest::prelude::*;
 use studyrun::bearing::{DampingModel, RaceWaviness};
-use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank};
-use studyrun::simd::Isa;
+use studyrun::mechanism::{CaseParams, Location, SliderCrank};
+use studyrun::numeric::simd::Isa;
 use studyrun::solve::OdeSystem;
 
 /// Everything one evaluation returns, as exact bit patterns (`{:?}` of an `f64` is
 /// its shortest round-trip form, so equal text means equal bits).
-fn evaluation(m: &mut MinimalSliderCrank, t: f64, y: &[f64; 4]) -> String {
+fn evaluation(m: &mut SliderCrank, t: f64, y: &[f64; 4]) -> String {
     let mut dydt = [0.0; 4];
     let rhs = m.rhs(t, y, &mut dydt).map(|()| (dydt, m.margin()));
     format!("{rhs:?} {:?}", m.sample(t, y))
@@ -22,7 +22,7 @@ fn evaluation(m: &mut MinimalSliderCrank, t: f64, y: &[f64; 4]) -> String {
 
 #[test]
 fn this_machine_runs_the_avx_lanes_when_it_has_them() {
-    let mut m = MinimalSliderCrank::new(&CaseParams::default()).unwrap();
+    let mut m = SliderCrank::new(&CaseParams::default()).unwrap();
     #[cfg(target_arch = "x86_64")]
     assert_eq!(
         m.set_isa(Isa::Avx) == Isa::Avx,
@@ -64,7 +64,7 @@ proptest! {
         c.bearing.outer_waviness = RaceWaviness::single(12, outer);
         let y = [e[0], e[1], v[0], v[1]];
         let [baseline, avx] = [Isa::Baseline, Isa::Avx].map(|isa| {
-            let mut m = MinimalSliderCrank::new(&c).unwrap();
+            let mut m = SliderCrank::new(&c).unwrap();
             m.set_isa(isa);
             if held {
                 // A regime frozen a little away from the state, so some balls are

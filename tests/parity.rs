@@ -21,9 +21,9 @@ use proptest::prelude::*;
 use studyrun::bearing::kernel::APPROACH_MARGIN_TIME;
 use studyrun::bearing::{BallSet, BearingParams, DampingModel, Harmonic, RaceWaviness};
 use studyrun::bearing::{CageWeights, ContactState};
-use studyrun::mechanism::{CaseParams, Location, MinimalSliderCrank, Sample, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, Sample, SliderCrank};
 use studyrun::multibody::{BodyRef, Pose};
-use studyrun::simd::F64x4;
+use studyrun::numeric::simd::F64x4;
 use studyrun::solve::{integrate, Method, SolverSettings};
 
 fn waves(n: u32, a: f64, phase: f64) -> RaceWaviness {
@@ -151,8 +151,8 @@ const NAMES: [&str; 9] = [
 
 /// Reference and minimal samples along the reference trajectory over `duration`.
 fn paired_samples(case: &CaseParams, duration: f64) -> Vec<(Sample, Sample)> {
-    let mut reference = SliderCrank::new(case).unwrap();
-    let mut minimal = MinimalSliderCrank::new(case).unwrap();
+    let mut reference = CartesianSliderCrank::new(case).unwrap();
+    let mut minimal = SliderCrank::new(case).unwrap();
     let y0 = reference.initial_state();
     let times: Vec<f64> = (0..=4000).map(|k| duration * k as f64 / 4000.0).collect();
     let settings = SolverSettings::new(Method::DormandPrince {
@@ -235,14 +235,14 @@ fn eccentricity_path(case: &CaseParams, minimal: bool, rtol: f64) -> Vec<[f64; 2
     });
     let mut e = Vec::new();
     if minimal {
-        let mut m = MinimalSliderCrank::new(case).unwrap();
+        let mut m = SliderCrank::new(case).unwrap();
         let y0 = m.initial_state();
         integrate(&mut m, &settings, 0.0, &y0, &times, |m, t, y| {
             e.push(m.sample(t, y)?.eccentricity);
             Ok(())
         })
     } else {
-        let mut m = SliderCrank::new(case).unwrap();
+        let mut m = CartesianSliderCrank::new(case).unwrap();
         let y0 = m.initial_state();
         integrate(&mut m, &settings, 0.0, &y0, &times, |m, t, y| {
             e.push(m.sample(t, y)?.eccentricity);

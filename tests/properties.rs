@@ -19,8 +19,7 @@
 //!   the integration error still scales with the energies in the state;
 //! - position residual < 1e-9 m and velocity residual < 1e-7 m/s.
 
-#[path = "common/hard.rs"]
-mod hard;
+use crate::common::hard;
 
 use std::f64::consts::TAU;
 
@@ -28,7 +27,7 @@ use hard::*;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use studyrun::bearing::{BearingParams, DampingModel, Harmonic, RaceWaviness};
-use studyrun::mechanism::{CaseParams, Location, MechanismParams, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, MechanismParams};
 
 /// Simulated time of each case (s) and its number of sample intervals.
 const DURATION: f64 = 5e-3;
@@ -95,7 +94,7 @@ fn case() -> impl Strategy<Value = CaseParams> {
 
 /// Kinetic energy of the initial state (J).
 fn initial_kinetic_energy(case: &CaseParams) -> f64 {
-    let mut mech = SliderCrank::new(case).unwrap();
+    let mut mech = CartesianSliderCrank::new(case).unwrap();
     let y0 = mech.initial_state();
     mech.system_mut().evaluate(0.0, &y0, false).unwrap();
     mech.system().kinetic_energy()

@@ -1,10 +1,10 @@
 //! Invalid inputs are refused with an error that names the field.
 
 use studyrun::bearing::{BearingParams, RaceWaviness};
-use studyrun::mechanism::{CaseParams, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams};
 
 fn refused(case: CaseParams, field: &str) {
-    let err = SliderCrank::new(&case)
+    let err = CartesianSliderCrank::new(&case)
         .expect_err("must be refused")
         .to_string();
     assert!(err.contains(field), "error `{err}` does not name `{field}`");
@@ -55,7 +55,7 @@ fn out_of_range_inputs_are_refused_naming_the_field() {
 fn error_message_shows_value_and_rule() {
     let mut c = CaseParams::default();
     c.bearing.ball_count = 2;
-    let err = SliderCrank::new(&c).unwrap_err().to_string();
+    let err = CartesianSliderCrank::new(&c).unwrap_err().to_string();
     assert_eq!(
         err,
         "invalid parameter `bearing.ball_count` = 2: an integer >= 3"

@@ -3,6 +3,9 @@
 Environment:
   STUDYRUN_SMOKE_FILE  the result of `studyrun studies/smoke.yaml` (.ci/run makes it); unset: skip.
   STUDYRUN_PAPER_FILE  optional, the result of `studyrun studies/paper.yaml`; unset: skip those tests.
+  STUDYRUN_SHARD_FILES optional, colon-separated shard files of the smoke study
+                       (`studyrun studies/smoke.yaml --shard K/N`); unset: skip those tests.
+  STUDYRUN_MERGED_FILE optional, `studyrun merge` of those shards; unset: skip that comparison.
 """
 
 import os
@@ -40,6 +43,25 @@ def smoke_path():
 @pytest.fixture(scope="session")
 def paper_path():
     return study_path("STUDYRUN_PAPER_FILE", "studyrun studies/paper.yaml -o paper.h5")
+
+
+@pytest.fixture(scope="session")
+def shard_paths():
+    value = os.environ.get("STUDYRUN_SHARD_FILES")
+    if not value:
+        pytest.skip(
+            "STUDYRUN_SHARD_FILES is not set: run `studyrun studies/smoke.yaml --shard 1/2 -o s1.h5` "
+            "(and 2/2) and set it to s1.h5:s2.h5"
+        )
+    paths = [p for p in value.split(os.pathsep) if p]
+    for p in paths:
+        assert os.path.isfile(p), f"STUDYRUN_SHARD_FILES: {p} does not exist"
+    return [os.path.abspath(p) for p in paths]
+
+
+@pytest.fixture(scope="session")
+def merged_path():
+    return study_path("STUDYRUN_MERGED_FILE", "studyrun merge merged.h5 s1.h5 s2.h5")
 
 
 @pytest.fixture(scope="session")

@@ -11,7 +11,7 @@
 //! - Branch-free over the balls: contact is a mask (`δ > 0`), never an `if`. The
 //!   loop runs over [`LANES`]-wide vectors generic over [`Lanes`]: two SSE2
 //!   registers in baseline x86-64 code, one AVX register where the caller
-//!   dispatched to AVX at run time ([`crate::simd::dispatch`]). Both do the same
+//!   dispatched to AVX at run time ([`crate::numeric::simd::dispatch`]). Both do the same
 //!   IEEE operations in the same order, without fused multiply-add, so results
 //!   depend neither on the machine that built the binary nor on the one running it.
 //! - The damping law is a type parameter ([`Undamped`], [`CompressionOnly`],
@@ -34,8 +34,8 @@
 
 use std::cell::Cell;
 
-use crate::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
-use crate::trig::{sin_cos4, AffineSinCos};
+use crate::numeric::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
+use crate::numeric::trig::{sin_cos4, AffineSinCos};
 
 use super::{BearingParams, CageWeights, DampingModel, RaceWaviness};
 
@@ -526,7 +526,7 @@ impl BallSet {
     /// [`BallSet::force_in`] with `regime`, or [`BallSet::force`] without, and the
     /// `(sin, cos)` of a caller's `angle` (rad), if any, from the same SIMD `sin_cos`
     /// as the kernel's own angles (with up to two waviness harmonics, it adds
-    /// nothing); `(0, 1)` without one. Runs on lanes `V` ([`crate::simd`]; every
+    /// nothing); `(0, 1)` without one. Runs on lanes `V` ([`crate::numeric::simd`]; every
     /// lane type gives the same bits).
     #[inline(always)]
     pub fn evaluate<V: Lanes>(

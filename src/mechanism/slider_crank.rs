@@ -1,234 +1,236 @@
-//! The slider-crank of MODEL.md §1 with the bearing at `crank_ground`, at
-//! `crank_rod`, or nowhere (`ideal`).
+//! The slider-crank of MODEL.md §1 in minimal coordinates: the production model.
 //!
-//! Bodies: crank (0), connecting rod (1), slider (2); coordinates
-//! `q = (x2, y2, θ2, x3, y3, θ3, x4, y4, θ4)`. The crank pivot is the origin, the
-//! slider runs on the x axis, and the crank is driven at `θ2 = ω t`.
+//! With the crank driven at `θ2 = ω t` and the slider on the x axis, a bearing case
+//! has two degrees of freedom, the bearing eccentricity `e = (ex, ey)`, and the
+//! state is `y = (ex, ey, ėx, ėy)`. Everything else follows in closed form:
+//!
+//! - rod big end `A = e + L2 u` with `u = (cos ω t, sin ω t)` (crank_ground: the
+//!   crank pivot sits at `e`; crank_rod: the big end sits `e` from the crank pin);
+//! - rod angle from `A_y + L3 sin θ3 = 0`, `cos θ3 = +√(1 − sin²θ3)` (slider to the
+//!   right of the big end, the branch of the initial configuration);
+//! - rod centre `A + (L3/2)(cos θ3, sin θ3)`, slider `x4 = A_x + L3 cos θ3`;
+//! - crank centre `c_g e + (L2/2) u`, with `c_g = 1` at crank_ground and 0 at crank_rod.
+//!
+//! Every acceleration is affine in `ë`, so d'Alembert's principle over `δe` gives a
+//! 2×2 system `M̄(θ3) ë = Q − Σ Jᵀ m a₀`, solved by Cramer's rule. The outputs come
+//! from the same principle: the driver torque from a virtual `δθ2` at fixed `e`, the
+//! force on the rod from the crank from the rod-and-slider's x balance and the rod's
+//! moment balance about the slider pin, the ground reaction from the crank's balance.
+//!
+//! Constraints hold exactly by construction (no drift, no Newton iteration). The
+//! general Cartesian model ([`super::CartesianSliderCrank`]) is kept as the reference: the
+//! parity tests compare the two. The ideal mechanism has no state at all and is
+//! sampled in closed form.
 
-use std::f64::consts::PI;
-use std::fmt;
-use std::str::FromStr;
-
-use crate::bearing::{BallBearing, BearingParams, Mounting};
+use crate::bearing::{BallSet, BallSum, CageWeights, Regime};
 use crate::error::{ModelError, ParamError};
-use crate::multibody::{Body, BodyRef, Constraint, System};
+use crate::numeric::simd::{dispatch, Isa, LaneTask, Lanes};
+use crate::solve::OdeSystem;
 
-/// Standard gravity (m/s²), along −y when the effect is on.
-pub const GRAVITY: f64 = 9.81;
+use super::{CaseParams, Location, Sample, GRAVITY};
 
-const CRANK: BodyRef = BodyRef::Moving(0);
-const ROD: BodyRef = BodyRef::Moving(1);
-const SLIDER: BodyRef = BodyRef::Moving(2);
-/// Index of the slider's x coordinate in `q`.
-const SLIDER_X: usize = 6;
-
-/// Where the bearing sits (a grid axis).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Location {
-    /// No bearing: all joints ideal (the reference mechanism).
-    Ideal,
-    /// Bearing between crank and ground (paper Example 1).
-    CrankGround,
-    /// Bearing between crank and connecting rod (paper Example 2).
-    CrankRod,
+/// Mechanism constants of the reduced equations (SI).
+#[derive(Debug, Clone, Copy)]
+struct Constants {
+    l2: f64,
+    l3: f64,
+    /// `1/L3` (1/m).
+    inv_l3: f64,
+    m2: f64,
+    m3: f64,
+    j3: f64,
+    m4: f64,
+    omega: f64,
+    /// `c_g`: 1 when the crank translates with `e` (crank_ground), else 0.
+    crank_moves: f64,
+    /// Gravity (m/s²) along −y, 0 when off.
+    g: f64,
+    /// The reduced mass matrix `M̄ = [[m11, m_h t], [m_h t, m22]]`, `t = tan θ3`,
+    /// by its parts (kg): `m11 = m2 c_g + m3 + m4`, `m_h = m3/2 + m4`, and
+    /// `m22 = m22_0 + (j3/L3² + m_q sin²θ3)/cos²θ3` with `m22_0 = m2 c_g + m3/4`,
+    /// `m_q = m3/4 + m4`, `j3/L3²` as `j3_l3`.
+    m11: f64,
+    m_h: f64,
+    m22_0: f64,
+    m_q: f64,
+    j3_l3: f64,
+    /// `det M̄ cos²θ3 = p0 + p1 sin²θ3` (kg²).
+    p0: f64,
+    p1: f64,
 }
 
-impl Location {
-    /// Every location, in the order used for ids and files.
-    pub const ALL: [Location; 3] = [Location::Ideal, Location::CrankGround, Location::CrankRod];
-
-    /// The name used in grid files and outputs.
-    pub fn name(self) -> &'static str {
-        match self {
-            Location::Ideal => "ideal",
-            Location::CrankGround => "crank_ground",
-            Location::CrankRod => "crank_rod",
-        }
-    }
-}
-
-impl fmt::Display for Location {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Location {
-    type Err = ParamError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Location::ALL
-            .into_iter()
-            .find(|l| l.name() == s)
-            .ok_or_else(|| ParamError::new("location", s, "one of ideal, crank_ground, crank_rod"))
-    }
-}
-
-/// Body parameters of the slider-crank (SI; defaults of MODEL.md §1).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MechanismParams {
-    /// Crank length `L2` (m).
-    pub crank_length: f64,
-    /// Connecting rod length `L3` (m).
-    pub rod_length: f64,
-    /// Crank mass `m2` (kg).
-    pub crank_mass: f64,
-    /// Crank moment of inertia `J2` about its centre of mass (kg m²).
-    pub crank_inertia: f64,
-    /// Rod mass `m3` (kg).
-    pub rod_mass: f64,
-    /// Rod moment of inertia `J3` (kg m²).
-    pub rod_inertia: f64,
-    /// Slider mass `m4` (kg).
-    pub slider_mass: f64,
-    /// Slider moment of inertia `J4` (kg m²); immaterial, θ4 is constrained.
-    pub slider_inertia: f64,
-}
-
-impl Default for MechanismParams {
-    fn default() -> Self {
+impl Constants {
+    /// The constants of mechanism `mp` with the bearing at `location`, crank speed
+    /// `omega` (rad/s) and gravity `g` (m/s², 0 when off).
+    fn new(mp: &super::MechanismParams, location: Location, omega: f64, g: f64) -> Self {
+        let inv_l3 = 1.0 / mp.rod_length;
+        let (m2, m3, j3, m4) = (mp.crank_mass, mp.rod_mass, mp.rod_inertia, mp.slider_mass);
+        let crank_moves = if location == Location::CrankGround {
+            1.0
+        } else {
+            0.0
+        };
+        let m11 = m2 * crank_moves + m3 + m4;
+        let m_h = 0.5 * m3 + m4;
+        let m22_0 = m2 * crank_moves + 0.25 * m3;
+        let m_q = 0.25 * m3 + m4;
+        let j3_l3 = j3 * inv_l3 * inv_l3;
         Self {
-            crank_length: 0.05,
-            rod_length: 0.12,
-            crank_mass: 0.30,
-            crank_inertia: 1.0e-4,
-            rod_mass: 0.21,
-            rod_inertia: 2.5e-4,
-            slider_mass: 0.14,
-            slider_inertia: 1.0e-4,
+            l2: mp.crank_length,
+            l3: mp.rod_length,
+            inv_l3,
+            m2,
+            m3,
+            j3,
+            m4,
+            omega,
+            crank_moves,
+            g,
+            m11,
+            m_h,
+            m22_0,
+            m_q,
+            j3_l3,
+            p0: m11 * (m22_0 + j3_l3),
+            p1: m11 * (m_q - m22_0) - m_h * m_h,
         }
+    }
+
+    /// Kinematics at crank angle `ω t` given as `(sin, cos)`, eccentricity `e` (m)
+    /// and its rate `ed` (m/s).
+    #[inline(always)]
+    fn kinematics(
+        &self,
+        (uy, ux): (f64, f64),
+        e: [f64; 2],
+        ed: [f64; 2],
+    ) -> Result<Kinematics, ModelError> {
+        let k = self;
+        let w2 = k.omega * k.omega;
+        let s = -(e[1] + k.l2 * uy) * k.inv_l3;
+        let s2 = s * s;
+        let c2 = 1.0 - s2;
+        if c2.is_nan() {
+            return Err(ModelError::NonFinite {
+                what: "eccentricity",
+            });
+        }
+        if c2 <= 1e-12 {
+            return Err(ModelError::SingularConstraints);
+        }
+        // The divisions and the square root depend on s alone and run side by side:
+        // 1/c = c · (1/c²), M̄⁻¹ = adj(M̄) cos²θ3 / (p0 + p1 s²), and every term
+        // below that needs only 1/c² (k_θ², the whirl, tan θ3 times the along-rod
+        // part) takes it instead of 1/c.
+        let c = c2.sqrt();
+        let inv_c2 = 1.0 / c2;
+        let inv_p = 1.0 / (k.p0 + k.p1 * s2);
+        let inv_c = c * inv_c2;
+        // θ̇3 = k_θ Ȧ_y with k_θ = ∂θ3/∂A_y = −1/(L3 c); the whirl L3 θ̇3².
+        let rate = ed[1] + k.l2 * k.omega * ux;
+        let whirl = k.inv_l3 * inv_c2 * (rate * rate);
+        // At ë = 0, with Ä_y = −L2 ω² sin ωt: θ̈3 = k_θ (Ä_y − s whirl), and along
+        // the rod −L3 (s θ̈3 + c θ̇3²) = (s Ä_y − whirl)/c.
+        let big_end_y = -k.l2 * w2 * uy;
+        let (normal, along_c) = (big_end_y - s * whirl, s * big_end_y - whirl);
+        let along = along_c * inv_c;
+        let big_end_x = -k.l2 * w2 * ux;
+        Ok(Kinematics {
+            u: [ux, uy],
+            s,
+            c,
+            tan: s * inv_c,
+            k_theta: -k.inv_l3 * inv_c,
+            theta_dd0: -k.inv_l3 * inv_c * normal,
+            rod_dd0: [big_end_x + 0.5 * along, 0.5 * big_end_y],
+            slider_dd0: big_end_x + along,
+            crank_dd0: [0.5 * big_end_x, 0.5 * big_end_y],
+            big_end_x,
+            along,
+            j3_theta_dd0: k.j3_l3 * inv_c2 * normal,
+            tan_along: s * along_c * inv_c2,
+            inv_mass: [
+                (k.m22_0 * c2 + k.j3_l3 + k.m_q * s2) * inv_p,
+                -k.m_h * s * c * inv_p,
+                k.m11 * c2 * inv_p,
+            ],
+        })
+    }
+
+    /// `ë` (m/s²) from the reduced equations for bearing force `f` on the housing (N).
+    #[inline(always)]
+    fn eccentricity_acceleration(&self, kin: &Kinematics, f: [f64; 2]) -> [f64; 2] {
+        let k = self;
+        let cg = k.crank_moves;
+        // The generalised forces without the bearing's, which comes last (it waits
+        // for the ball loop): the journal receives −F; gravity's part is constant.
+        // The rod's and slider's terms are gathered by what they multiply.
+        let qx =
+            -(k.m2 * cg * kin.crank_dd0[0]) - (k.m3 + k.m4) * kin.big_end_x - k.m_h * kin.along;
+        let qy = -(k.g * (k.m2 * cg + 0.5 * k.m3))
+            - k.m2 * cg * kin.crank_dd0[1]
+            - kin.j3_theta_dd0
+            - 0.5 * k.m3 * kin.rod_dd0[1]
+            - k.m_h * kin.tan * kin.big_end_x
+            - k.m_q * kin.tan_along;
+        let (bx, by) = (qx - f[0], qy - f[1]);
+        let [i11, i12, i22] = kin.inv_mass;
+        [i11 * bx + i12 * by, i12 * bx + i22 * by]
     }
 }
 
-impl MechanismParams {
-    /// Checks every field; the error names the field, its value and what is allowed.
-    pub fn validate(&self) -> Result<(), ParamError> {
-        let fields = [
-            ("mechanism.crank_length", self.crank_length),
-            ("mechanism.rod_length", self.rod_length),
-            ("mechanism.crank_mass", self.crank_mass),
-            ("mechanism.crank_inertia", self.crank_inertia),
-            ("mechanism.rod_mass", self.rod_mass),
-            ("mechanism.rod_inertia", self.rod_inertia),
-            ("mechanism.slider_mass", self.slider_mass),
-            ("mechanism.slider_inertia", self.slider_inertia),
-        ];
-        for (name, v) in fields {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(ParamError::new(name, v, "finite and > 0"));
-            }
-        }
-        if self.rod_length <= self.crank_length {
-            return Err(ParamError::new(
-                "mechanism.rod_length",
-                self.rod_length,
-                format!(
-                    "greater than mechanism.crank_length = {} (else the crank cannot turn)",
-                    self.crank_length
-                ),
-            ));
-        }
-        Ok(())
-    }
+/// The bearing at its location.
+#[derive(Debug, Clone)]
+struct Bearing {
+    weights: CageWeights,
+    balls: BallSet,
+    /// The loaded balls while an integrator holds the regime ([`OdeSystem::hold_regime`]).
+    regime: Regime,
+    /// Whether [`OdeSystem::rhs`] uses `regime` (else the natural law).
+    held: bool,
+    /// Switching margin of the latest right-hand side (m).
+    margin: f64,
 }
 
-/// Everything that defines one simulated case.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CaseParams {
-    /// Body parameters.
-    pub mechanism: MechanismParams,
-    /// Bearing parameters (unused for [`Location::Ideal`]).
-    pub bearing: BearingParams,
-    /// Where the bearing sits.
-    pub location: Location,
-    /// Crank speed (rev/min, > 0).
-    pub rpm: f64,
-    /// Gravity along −y ([`GRAVITY`]) when true.
-    pub gravity: bool,
+/// Kinematics at one `(t, e, ė)`, with every acceleration split as `J ë + a₀`.
+#[derive(Debug, Clone, Copy)]
+struct Kinematics {
+    /// `(cos ω t, sin ω t)`.
+    u: [f64; 2],
+    /// `sin θ3`, `cos θ3`, `tan θ3`.
+    s: f64,
+    c: f64,
+    tan: f64,
+    /// `∂θ3/∂A_y = −1/(L3 cos θ3)` (rad/m).
+    k_theta: f64,
+    /// `θ̈3` at `ë = 0` (rad/s²).
+    theta_dd0: f64,
+    /// Rod centre, slider and crank centre accelerations at `ë = 0` (m/s²).
+    rod_dd0: [f64; 2],
+    slider_dd0: f64,
+    crank_dd0: [f64; 2],
+    /// The big end's x acceleration `−L2 ω² cos ωt` (m/s²).
+    big_end_x: f64,
+    /// The slider's acceleration relative to the big end's x at `ë = 0`, `(s Ä_y − L3 θ̇3²)/c` (m/s²).
+    along: f64,
+    /// `J3 k_θ θ̈3` at `ë = 0` (N), from `k_θ² = 1/(L3² cos²θ3)`.
+    j3_theta_dd0: f64,
+    /// `tan θ3 · along` (m/s²), from `1/cos²θ3`.
+    tan_along: f64,
+    /// `M̄⁻¹` (1/kg) as its entries `[11, 12, 22]`.
+    inv_mass: [f64; 3],
 }
 
-impl Default for CaseParams {
-    /// The paper's crank_ground case at 300 rpm with 9 balls and no waviness.
-    fn default() -> Self {
-        Self {
-            mechanism: MechanismParams::default(),
-            bearing: BearingParams::default(),
-            location: Location::CrankGround,
-            rpm: 300.0,
-            gravity: false,
-        }
-    }
-}
-
-impl CaseParams {
-    /// Crank speed ω (rad/s).
-    pub fn omega(&self) -> f64 {
-        2.0 * PI * self.rpm / 60.0
-    }
-
-    /// Checks every field.
-    pub fn validate(&self) -> Result<(), ParamError> {
-        self.mechanism.validate()?;
-        if self.location != Location::Ideal {
-            self.bearing.validate()?;
-            let slack = self.mechanism.rod_length - self.mechanism.crank_length;
-            if self.bearing.clearance.abs() >= slack {
-                return Err(ParamError::new(
-                    "bearing.clearance",
-                    self.bearing.clearance,
-                    format!("|clearance| below rod_length - crank_length = {slack} m"),
-                ));
-            }
-        }
-        if !(self.rpm.is_finite() && self.rpm > 0.0) {
-            return Err(ParamError::new("rpm", self.rpm, "finite and > 0 rev/min"));
-        }
-        Ok(())
-    }
-}
-
-/// The outputs of MODEL.md §3 at one instant.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Sample {
-    /// Slider acceleration ẍ4 (m/s²).
-    pub slider_acceleration: f64,
-    /// Torque the driver applies to the crank, `−λ_driver` (N m, counter-clockwise +).
-    pub crank_moment: f64,
-    /// Force transmitted at the crank–ground joint: on the ground from the crank
-    /// (N, global); the bearing's `F` when the bearing is there.
-    pub crank_ground_force: [f64; 2],
-    /// Force transmitted at the crank–rod joint: on the crank from the rod (N,
-    /// global); the bearing's `F` when the bearing is there.
-    pub crank_rod_force: [f64; 2],
-    /// Bearing eccentricity `e` (m, global; zero for the ideal mechanism).
-    pub eccentricity: [f64; 2],
-    /// Number of loaded balls (0 for the ideal mechanism).
-    pub loaded_balls: usize,
-}
-
-impl Sample {
-    /// The force at the joint a bearing at `location` occupies (or would occupy),
-    /// so that bearing and ideal cases compare one to one. `None` for `Ideal`.
-    pub fn joint_force(&self, location: Location) -> Option<[f64; 2]> {
-        match location {
-            Location::Ideal => None,
-            Location::CrankGround => Some(self.crank_ground_force),
-            Location::CrankRod => Some(self.crank_rod_force),
-        }
-    }
-}
-
-/// A slider-crank case ready to integrate: the system, its initial state and
-/// where to read the outputs.
+/// The slider-crank case in minimal coordinates; implements [`OdeSystem`] for the
+/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s) and has no state for
+/// [`Location::Ideal`].
 #[derive(Debug, Clone)]
 pub struct SliderCrank {
-    system: System<BallBearing>,
     location: Location,
-    q0: Vec<f64>,
-    qd0: Vec<f64>,
-    driver_row: usize,
-    /// Row of the remaining ideal revolute at crank–ground or crank–rod (if any).
-    crank_ground_row: Option<usize>,
-    crank_rod_row: Option<usize>,
+    k: Constants,
+    bearing: Option<Bearing>,
+    /// The instruction set of the right-hand side ([`Isa::detect`] by default).
+    isa: Isa,
 }
 
 impl SliderCrank {
@@ -236,160 +238,44 @@ impl SliderCrank {
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
         let mp = &case.mechanism;
-        let (l2, l3) = (mp.crank_length, mp.rod_length);
-        let bodies = vec![
-            Body {
-                mass: mp.crank_mass,
-                inertia: mp.crank_inertia,
-            },
-            Body {
-                mass: mp.rod_mass,
-                inertia: mp.rod_inertia,
-            },
-            Body {
-                mass: mp.slider_mass,
-                inertia: mp.slider_inertia,
-            },
-        ];
-        let crank_ground = Constraint::Revolute {
-            i: BodyRef::Ground,
-            s_i: [0.0, 0.0],
-            j: CRANK,
-            s_j: [-0.5 * l2, 0.0],
-        };
-        let crank_rod = Constraint::Revolute {
-            i: CRANK,
-            s_i: [0.5 * l2, 0.0],
-            j: ROD,
-            s_j: [-0.5 * l3, 0.0],
-        };
-        let common = [
-            Constraint::Revolute {
-                i: ROD,
-                s_i: [0.5 * l3, 0.0],
-                j: SLIDER,
-                s_j: [0.0, 0.0],
-            },
-            Constraint::Translational {
-                i: BodyRef::Ground,
-                s_i: [0.0, 0.0],
-                n_i: [0.0, 1.0],
-                j: SLIDER,
-                s_j: [0.0, 0.0],
-                theta0: 0.0,
-            },
-            Constraint::Driver {
-                body: CRANK,
-                theta0: 0.0,
-                omega: case.omega(),
-            },
-        ];
-        let gravity = case.gravity.then_some(GRAVITY);
-
-        // The ideal mechanism gives the initial positions and velocities (paper Table 3).
-        let q_nominal = vec![
-            0.5 * l2,
-            0.0,
-            0.0,
-            l2 + 0.5 * l3,
-            0.0,
-            0.0,
-            l2 + l3,
-            0.0,
-            0.0,
-        ];
-        let mut ideal_constraints = vec![crank_ground, crank_rod];
-        ideal_constraints.extend(common);
-        let mut ideal = System::new(
-            bodies.clone(),
-            ideal_constraints,
-            Vec::new(),
-            gravity,
-            Vec::new(),
-        )?;
-        ideal.initial_state(&q_nominal, &[0.0; 9]);
-        ideal
-            .evaluate(0.0, &[], false)
-            .map_err(|e| ParamError::new("mechanism", "initial configuration", e.to_string()))?;
-        let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
-
-        let (kept, independent, bearing) = match case.location {
-            Location::Ideal => {
-                return Ok(Self::assemble(
-                    ideal,
-                    case.location,
-                    q0,
-                    qd0,
-                    Some(0),
-                    Some(1),
-                ))
+        let bearing = (case.location != Location::Ideal).then(|| {
+            let mut balls = BallSet::new(&case.bearing);
+            let weights = CageWeights::of(&case.bearing);
+            if case.location == Location::CrankGround {
+                // The journal turns with the crank, the housing stands still: every
+                // angle of the kernel is affine in the crank angle.
+                balls.turn_with(weights, 1.0, 0.0);
             }
-            Location::CrankGround => {
-                let mount = Mounting {
-                    housing: BodyRef::Ground,
-                    housing_point: [0.0, 0.0],
-                    journal: CRANK,
-                    journal_point: [-0.5 * l2, 0.0],
-                    housing_theta0: 0.0,
-                    journal_theta0: q0[2],
-                };
-                (
-                    crank_rod,
-                    vec![0, 1],
-                    BallBearing::new(&case.bearing, mount)?,
-                )
+            Bearing {
+                weights,
+                regime: balls.no_regime(),
+                balls,
+                held: false,
+                margin: f64::INFINITY,
             }
-            Location::CrankRod => {
-                let mount = Mounting {
-                    housing: CRANK,
-                    housing_point: [0.5 * l2, 0.0],
-                    journal: ROD,
-                    journal_point: [-0.5 * l3, 0.0],
-                    housing_theta0: q0[2],
-                    journal_theta0: q0[5],
-                };
-                (
-                    crank_ground,
-                    vec![3, 4],
-                    BallBearing::new(&case.bearing, mount)?,
-                )
-            }
-        };
-        let mut constraints = vec![kept];
-        constraints.extend(common);
-        let system = System::new(bodies, constraints, vec![bearing], gravity, independent)?;
-        let (cg, cr) = match case.location {
-            Location::CrankGround => (None, Some(0)),
-            _ => (Some(0), None),
-        };
-        Ok(Self::assemble(system, case.location, q0, qd0, cg, cr))
+        });
+        Ok(Self {
+            location: case.location,
+            k: Constants::new(
+                mp,
+                case.location,
+                case.omega(),
+                if case.gravity { GRAVITY } else { 0.0 },
+            ),
+            bearing,
+            isa: Isa::detect(),
+        })
     }
 
-    fn assemble(
-        system: System<BallBearing>,
-        location: Location,
-        q0: Vec<f64>,
-        qd0: Vec<f64>,
-        crank_ground: Option<usize>,
-        crank_rod: Option<usize>,
-    ) -> Self {
-        let driver = system.constraint_row(if location == Location::Ideal { 4 } else { 3 });
-        Self {
-            crank_ground_row: crank_ground.map(|k| system.constraint_row(k)),
-            crank_rod_row: crank_rod.map(|k| system.constraint_row(k)),
-            driver_row: driver,
-            system,
-            location,
-            q0,
-            qd0,
-        }
-    }
-
-    /// Turns the energy ledger of the underlying system on or off.
-    #[must_use]
-    pub fn with_energy_ledger(mut self, on: bool) -> Self {
-        self.system = self.system.with_energy_ledger(on);
-        self
+    /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on
+    /// the baseline; returns the one in effect. Results are bit-identical either
+    /// way; this is for benchmarks and parity tests.
+    pub fn set_isa(&mut self, isa: Isa) -> Isa {
+        self.isa = match (isa, Isa::of_cpu()) {
+            (Isa::Avx, Isa::Avx) => Isa::Avx,
+            _ => Isa::Baseline,
+        };
+        self.isa
     }
 
     /// Where the bearing sits.
@@ -397,64 +283,222 @@ impl SliderCrank {
         self.location
     }
 
-    /// Initial positions `q(0)` of the ideal mechanism (m, rad).
-    pub fn initial_positions(&self) -> &[f64] {
-        &self.q0
+    /// The initial state: centred journal at rest relative to the housing (paper
+    /// Table 3), `(0, 0, 0, 0)`; empty for the ideal mechanism.
+    pub fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; self.dim()]
     }
 
-    /// The integrator's initial state: the independent coordinates and their rates
-    /// from the ideal mechanism (zero eccentricity), plus the ledger if on.
-    pub fn initial_state(&mut self) -> Vec<f64> {
-        self.system.initial_state(&self.q0, &self.qd0)
-    }
-
-    /// The underlying multibody system (the ODE the integrators advance).
-    pub fn system(&self) -> &System<BallBearing> {
-        &self.system
-    }
-
-    /// Mutable access to the underlying system, e.g. to hand it to an integrator.
-    pub fn system_mut(&mut self) -> &mut System<BallBearing> {
-        &mut self.system
+    /// Kinematics, bearing force and `ë` at `(t, y)`, with the balls loaded as the
+    /// held regime says if `held` (else by the sign of `δ`); no force and `ë = 0`
+    /// for the ideal mechanism. Runs on lanes `V`; inlined into each instruction
+    /// set's version of its callers.
+    #[inline(always)]
+    fn solve<V: Lanes>(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        held: bool,
+    ) -> Result<(Kinematics, BallSum, [f64; 2]), ModelError> {
+        let k = &self.k;
+        let crank = k.omega * t;
+        let Some(w) = self.bearing.as_mut() else {
+            return Ok((
+                k.kinematics(crank.sin_cos(), [0.0; 2], [0.0; 2])?,
+                BallSum::default(),
+                [0.0; 2],
+            ));
+        };
+        let &[ex, ey, vx, vy] = &y[..4] else {
+            unreachable!("a bearing case has 4 state variables")
+        };
+        let (e, ed) = ([ex, ey], [vx, vy]);
+        let regime = held.then_some(&w.regime);
+        let (kin, sum) = match self.location {
+            // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
+            Location::CrankGround => {
+                let state = w.weights.contact_state(e, ed, crank, 0.0);
+                let (sum, trig) = w.balls.evaluate::<V>(&state, regime, Some(crank));
+                (k.kinematics(trig, e, ed)?, sum)
+            }
+            // The journal turns with the rod, whose angle needs the crank's first.
+            _ => {
+                let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+                let (journal, housing) = race_turns(self.location, crank, &kin);
+                let state = w.weights.contact_state(e, ed, journal, housing);
+                (kin, w.balls.evaluate::<V>(&state, regime, None).0)
+            }
+        };
+        w.margin = sum.margin;
+        Ok((kin, sum, k.eccentricity_acceleration(&kin, sum.force)))
     }
 
     /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    /// The natural law applies (a ball is loaded when `δ > 0`) whatever regime an
+    /// integrator holds.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
-        self.system.evaluate(t, y, true)?;
-        Ok(self.read_sample())
+        dispatch(self.isa, SampleTask { sys: self, t, y })
     }
 
-    /// The outputs from the system's last evaluation with multipliers.
-    pub fn read_sample(&self) -> Sample {
-        let s = &self.system;
-        let lambda = s.lambda();
-        let joint = |row: Option<usize>| row.map(|r| [lambda[r], lambda[r + 1]]);
-        let reaction = s
-            .elements()
-            .first()
-            .map(|b| b.reaction())
-            .unwrap_or_default();
-        Sample {
-            slider_acceleration: s.qdd()[SLIDER_X],
-            crank_moment: -lambda[self.driver_row],
-            crank_ground_force: joint(self.crank_ground_row).unwrap_or(reaction.force),
-            crank_rod_force: joint(self.crank_rod_row).unwrap_or(reaction.force),
-            eccentricity: reaction.eccentricity,
-            loaded_balls: reaction.loaded_balls,
-        }
+    /// [`SliderCrank::sample`] on lanes `V`.
+    #[inline(always)]
+    fn sample_in<V: Lanes>(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
+        let (kin, sum, edd) = self.solve::<V>(t, y, false)?;
+        let k = self.k;
+        let (u, tan, cg) = (kin.u, kin.tan, k.crank_moves);
+        let theta_dd = kin.k_theta * edd[1] + kin.theta_dd0;
+        let rod_dd = [
+            edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
+            0.5 * edd[1] + kin.rod_dd0[1],
+        ];
+        let slider_dd = edd[0] + tan * edd[1] + kin.slider_dd0;
+        let crank_dd = [
+            cg * edd[0] + kin.crank_dd0[0],
+            cg * edd[1] + kin.crank_dd0[1],
+        ];
+
+        // Driver torque: d'Alembert over a virtual δθ2 at fixed e, under which the
+        // big end moves by L2 u⊥ δθ2 and the bearing force does no work.
+        let da = [-k.l2 * u[1], k.l2 * u[0]];
+        let crank_moment = k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
+            + k.j3 * theta_dd * kin.k_theta * da[1]
+            + k.m3 * (rod_dd[0] * (da[0] + 0.5 * tan * da[1]) + (rod_dd[1] + k.g) * 0.5 * da[1])
+            + k.m4 * slider_dd * (da[0] + tan * da[1]);
+
+        // Force R on the rod from the crank: the rod and slider's x balance, and the
+        // rod's moment balance about the slider pin B (the slider's force has no arm).
+        let rx = k.m3 * rod_dd[0] + k.m4 * slider_dd;
+        let p = [-0.5 * k.l3 * kin.c, -0.5 * k.l3 * kin.s]; // rod centre − B
+        let d = [-k.l3 * kin.c, -k.l3 * kin.s]; // A − B
+        let inertial = k.j3 * theta_dd + k.m3 * (p[0] * rod_dd[1] - p[1] * rod_dd[0]);
+        let weight = -p[0] * k.m3 * k.g; // (r3 − B) × (0, −m3 g)
+        let ry = (inertial - weight + d[1] * rx) / d[0];
+
+        let f = sum.force;
+        let on_crank_from_rod = match self.location {
+            Location::CrankRod => f,
+            _ => [-rx, -ry],
+        };
+        let on_ground_from_crank = match self.location {
+            Location::CrankGround => f,
+            _ => [
+                on_crank_from_rod[0] - k.m2 * crank_dd[0],
+                on_crank_from_rod[1] - k.m2 * (crank_dd[1] + k.g),
+            ],
+        };
+        Ok(Sample {
+            slider_acceleration: slider_dd,
+            crank_moment,
+            crank_ground_force: on_ground_from_crank,
+            crank_rod_force: on_crank_from_rod,
+            eccentricity: if self.bearing.is_some() {
+                [y[0], y[1]]
+            } else {
+                [0.0; 2]
+            },
+            loaded_balls: sum.loaded,
+        })
     }
 }
 
-impl crate::solve::OdeSystem for SliderCrank {
+impl OdeSystem for SliderCrank {
     fn dim(&self) -> usize {
-        self.system.dim()
+        if self.bearing.is_some() {
+            4
+        } else {
+            0
+        }
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
-        self.system.rhs(t, y, dydt)
+        if self.bearing.is_none() {
+            return Ok(());
+        }
+        let held = self.bearing.as_ref().is_some_and(|w| w.held);
+        let edd = dispatch(
+            self.isa,
+            RhsTask {
+                sys: self,
+                t,
+                y,
+                held,
+            },
+        )?;
+        dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+        Ok(())
     }
 
-    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
-        self.system.accept_step(t, y)
+    fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
+        if self.bearing.is_none() {
+            return Ok(false);
+        }
+        let k = &self.k;
+        let crank = k.omega * t;
+        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+        let (journal_turn, housing_turn) = race_turns(self.location, crank, &kin);
+        let Some(w) = self.bearing.as_mut() else {
+            return Ok(false);
+        };
+        let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
+        let angle = (self.location == Location::CrankGround).then_some(crank);
+        w.balls.freeze(&state, angle, &mut w.regime);
+        w.held = true;
+        Ok(true)
+    }
+
+    fn release_regime(&mut self) {
+        if let Some(w) = self.bearing.as_mut() {
+            w.held = false;
+        }
+    }
+
+    fn margin(&self) -> f64 {
+        self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
+    }
+}
+
+/// `ë` (m/s²) of [`OdeSystem::rhs`] as a [`LaneTask`].
+struct RhsTask<'a> {
+    sys: &'a mut SliderCrank,
+    t: f64,
+    y: &'a [f64],
+    held: bool,
+}
+
+impl LaneTask for RhsTask<'_> {
+    type Output = Result<[f64; 2], ModelError>;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Self::Output {
+        Ok(self.sys.solve::<V>(self.t, self.y, self.held)?.2)
+    }
+}
+
+/// [`SliderCrank::sample`] as a [`LaneTask`].
+struct SampleTask<'a> {
+    sys: &'a mut SliderCrank,
+    t: f64,
+    y: &'a [f64],
+}
+
+impl LaneTask for SampleTask<'_> {
+    type Output = Result<Sample, ModelError>;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Self::Output {
+        self.sys.sample_in::<V>(self.t, self.y)
+    }
+}
+
+/// The journal's and the housing's rotations since `t = 0` (rad) at crank angle
+/// `crank` (rad): at crank_rod the journal turns with the rod (its angle from `kin`)
+/// and the housing with the crank; elsewhere the journal turns with the crank and the
+/// housing (ground) stands still. The rod angle is `asin(sin θ3)`: the branch has
+/// `cos θ3 > 0`, so it equals `atan2(sin θ3, cos θ3)`, at a third of the cost.
+fn race_turns(location: Location, crank: f64, kin: &Kinematics) -> (f64, f64) {
+    match location {
+        Location::CrankRod => (kin.s.asin(), crank),
+        _ => (crank, 0.0),
     }
 }

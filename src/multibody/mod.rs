@@ -34,7 +34,7 @@ pub use constraint::Constraint;
 pub use force::{ElementEnergy, ForceElement};
 
 use crate::error::{ModelError, ParamError};
-use crate::linalg::Lu;
+use crate::numeric::linalg::Lu;
 use crate::solve::OdeSystem;
 use constraint::Rows;
 

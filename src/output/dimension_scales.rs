@@ -1,4 +1,4 @@
-//! HDF5 dimension scales (`H5DS*` of HDF5's high-level library, linked by `build.rs`):
+//! HDF5 dimension scales (`H5DS*` of HDF5's high-level library, linked through `hdf5-metno-sys`'s `hl` feature):
 //! what netCDF-4 readers (netCDF-C, h5netcdf, xarray) use to name the dimensions of a
 //! dataset. A 1-D coordinate variable is made a scale with [`set_scale`] and attached to
 //! each dimension of each data variable along it with [`attach_scale`].

@@ -39,7 +39,8 @@
 //! deflated itself. 1-D variables are contiguous and uncompressed.
 //! Link and attribute creation order are tracked, as netCDF-4 does.
 //!
-//! [`spectrum`] computes the one-sided amplitude spectra stored in the file.
+//! [`study_layout`] gives the layout of a study's file, [`merge`] combines shard files
+//! and [`inspect`] summarises one.
 
 mod attributes;
 mod datasets;
@@ -47,19 +48,28 @@ mod dimension_scales;
 mod direct_chunk;
 mod encode;
 mod error;
+mod inspect;
 mod layout;
+mod merge;
+mod paths;
 mod reader;
 mod reserve;
 mod shuffle;
-pub mod spectrum;
+mod study_layout;
 mod writer;
 
 pub use dimension_scales::ScaleError;
 pub use encode::ChunkEncoder;
 pub use error::StudyFileError;
+pub use inspect::inspect;
 pub use layout::{
     provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
     ERROR_MESSAGE, FREQUENCY, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
 };
+pub use merge::merge;
+pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
 pub use reader::{CaseData, StudyReader};
+pub use study_layout::{
+    fnv1a, study_layout, StudyFingerprint, MODEL_CONVENTIONS, REFERENCE_CHANNELS,
+};
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

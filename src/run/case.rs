@@ -2,71 +2,11 @@
 
 use super::stats::thread_cpu;
 use crate::mechanism::CaseParams;
-use crate::metrics::{vibration_metrics, Deviation};
-use crate::output::spectrum::SpectrumPlan;
-use crate::output::{Status, VarSpec};
-use crate::simulate::{simulate, CaseOutput, CHANNELS};
+use crate::output::Status;
+use crate::signal::spectrum::SpectrumPlan;
+use crate::signal::{analyse, metric_specs, CaseAnalysis};
+use crate::simulate::{simulate, CaseOutput};
 use crate::study::Study;
-
-/// Channels whose deviation from the ideal mechanism is a metric.
-const DEVIATION_CHANNELS: [(&str, &str); 3] = [
-    ("slider_acceleration", "m s-2"),
-    ("crank_moment", "N m"),
-    ("bearing_force", "N"),
-];
-
-/// The per-case metric variables, in file order.
-pub fn metric_specs() -> Vec<VarSpec> {
-    let mut specs = Vec::new();
-    for (ch, units) in DEVIATION_CHANNELS {
-        specs.push(VarSpec::new(
-            format!("{ch}_rms_deviation"),
-            units,
-            format!("RMS of {ch} minus the ideal mechanism's, after the transient"),
-        ));
-        specs.push(VarSpec::new(
-            format!("{ch}_peak_deviation"),
-            units,
-            format!("largest |{ch} minus the ideal mechanism's|, after the transient"),
-        ));
-        specs.push(VarSpec::new(
-            format!("{ch}_reference_rms"),
-            units,
-            format!("RMS of the ideal mechanism's {ch} over the same window"),
-        ));
-    }
-    specs.extend([
-        VarSpec::new(
-            "max_bearing_force",
-            "N",
-            "largest bearing force |F| after the transient",
-        ),
-        VarSpec::new(
-            "min_loaded_balls",
-            "1",
-            "fewest loaded balls after the transient",
-        ),
-        VarSpec::new(
-            "max_loaded_balls",
-            "1",
-            "most loaded balls after the transient",
-        ),
-        VarSpec::new("steps", "1", "accepted integrator steps"),
-        VarSpec::new("rejected_steps", "1", "rejected integrator steps"),
-        VarSpec::new("rhs_evals", "1", "right-hand-side evaluations"),
-        VarSpec::new(
-            "contact_events",
-            "1",
-            "contact switches the integrator located and restarted at",
-        ),
-        VarSpec::new(
-            "wall_time",
-            "s",
-            "wall-clock time of the case (integration, sampling, spectra)",
-        ),
-    ]);
-    specs
-}
 
 /// What one case contributes to the file, owned so it can cross threads.
 #[derive(Debug, Clone, PartialEq)]
@@ -133,41 +73,21 @@ pub fn run_case(
         Ok(out) => out,
         Err(e) => return failed(e.to_string(), cost),
     };
-    let window = study.analysis_window();
-    let mut spectra = Vec::with_capacity(study.spectrum_channels.len());
-    for ch in &study.spectrum_channels {
-        let series = out.channel(ch).expect("spectrum channels are validated");
-        let mut amp = vec![0.0; plan.bins()];
-        if let Err(e) = plan.amplitude(&series[window.clone()], &mut amp) {
-            return failed(e.to_string(), cost);
-        }
-        spectra.push(amp);
-    }
-    let m = vibration_metrics(&out, reference, window.clone());
-    let analysed = |name: &str| &out.channel(name).expect("channel exists")[window.clone()];
-    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let mut metrics = Vec::with_capacity(n_metrics);
-    for d in [m.slider_acceleration, m.crank_moment, m.bearing_force] {
-        let Deviation {
-            rms,
-            peak,
-            reference_rms,
-        } = d;
-        metrics.extend([rms, peak, reference_rms]);
-    }
-    let loaded = analysed("loaded_balls");
-    metrics.extend([
-        max(analysed("bearing_force")),
-        min(loaded),
-        max(loaded),
-        out.stats.steps as f64,
-        out.stats.rejected as f64,
-        out.stats.rhs_evals as f64,
-        out.stats.events as f64,
-        start.elapsed().as_secs_f64(),
-    ]);
-    debug_assert_eq!(metrics.len(), n_metrics);
+    let analysis = analyse(
+        &out,
+        reference,
+        study.analysis_window(),
+        &study.spectrum_channels,
+        plan,
+    );
+    let CaseAnalysis {
+        spectra,
+        mut metrics,
+    } = match analysis {
+        Ok(a) => a,
+        Err(e) => return failed(e.to_string(), cost),
+    };
+    metrics.push(start.elapsed().as_secs_f64());
     cost.analysis = thread_cpu() - cpu_simulated;
     CaseResult {
         row,
@@ -178,32 +98,4 @@ pub fn run_case(
         metrics,
         cost,
     }
-}
-
-/// The reference series stored per ideal run: the channels an ideal mechanism has.
-pub const REFERENCE_CHANNELS: [&str; 6] = [
-    "slider_acceleration",
-    "crank_moment",
-    "crank_ground_force_x",
-    "crank_ground_force_y",
-    "crank_rod_force_x",
-    "crank_rod_force_y",
-];
-
-/// The [`VarSpec`]s of the reference series (`reference_<channel>`).
-pub fn reference_specs() -> Vec<VarSpec> {
-    REFERENCE_CHANNELS
-        .iter()
-        .map(|name| {
-            let ch = CHANNELS
-                .iter()
-                .find(|c| c.name == *name)
-                .expect("reference channels exist");
-            VarSpec::new(
-                format!("reference_{name}"),
-                ch.units,
-                format!("ideal mechanism: {}", ch.long_name),
-            )
-        })
-        .collect()
 }

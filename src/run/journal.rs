@@ -41,10 +41,12 @@ use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
 use std::ops::Range;
 use std::os::unix::fs::FileExt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::case::CaseResult;
-use crate::output::{ChunkEncoder, EncodedRecord, Status, Storage, StudyFileError, StudyWriter};
+use crate::output::{
+    ChunkEncoder, DataFile, EncodedRecord, Status, Storage, StudyFileError, StudyWriter,
+};
 
 const MAGIC: &[u8; 8] = b"SRJOURN3";
 const RECORD: &[u8; 4] = b"CASE";
@@ -102,69 +104,6 @@ impl JournalHeader {
         let raw = len * if self.storage.float32 { 4 } else { 8 };
         raw + raw / 1024 + 64
     }
-}
-
-/// Which of the two partial files a journal's chunks lie in; a resumed run writes the
-/// other one.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DataFile {
-    /// `OUT.h5.partial`, where a fresh run writes.
-    Partial,
-    /// `OUT.h5.partial.resumed`.
-    Resumed,
-}
-
-impl DataFile {
-    /// The partial file of this name for the result file `output`.
-    pub fn path(self, output: &Path) -> PathBuf {
-        with_suffix(
-            output,
-            match self {
-                Self::Partial => ".partial",
-                Self::Resumed => ".partial.resumed",
-            },
-        )
-    }
-
-    /// The other partial file: where a run resumed from this one writes.
-    pub fn other(self) -> Self {
-        match self {
-            Self::Partial => Self::Resumed,
-            Self::Resumed => Self::Partial,
-        }
-    }
-
-    fn code(self) -> u8 {
-        match self {
-            Self::Partial => 0,
-            Self::Resumed => 1,
-        }
-    }
-
-    fn from_code(code: u8) -> Option<Self> {
-        [Self::Partial, Self::Resumed]
-            .into_iter()
-            .find(|d| d.code() == code)
-    }
-}
-
-/// `path` with `suffix` appended to its file name.
-pub(super) fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(suffix);
-    PathBuf::from(s)
-}
-
-/// FNV-1a, 64 bit: the study fingerprint.
-pub fn fnv1a(parts: &[&[u8]]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for part in parts {
-        for &b in *part {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    h
 }
 
 /// CRC-32 (zlib's): of a record, what tells a whole record from a torn one; of a
@@ -546,6 +485,7 @@ impl JournalReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn result(row: usize, ok: bool) -> CaseResult {
         CaseResult {

@@ -13,22 +13,15 @@
 //! and encoded on its own, in one thread. [`RunStats`] says where the time went.
 
 mod case;
-mod inspect;
 mod journal;
-mod layout;
-mod merge;
 mod order;
 mod progress;
 mod stats;
 
-pub use case::{metric_specs, run_case, CaseCost, CaseResult, REFERENCE_CHANNELS};
-pub use inspect::inspect;
+pub use case::{run_case, CaseCost, CaseResult};
 pub use journal::{
-    fnv1a, DataFile, JournalEntry, JournalError, JournalHeader, JournalReader, JournalRecord,
-    JournalWriter,
+    JournalEntry, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
 };
-pub use layout::{study_layout, StudyFingerprint, MODEL_CONVENTIONS};
-pub use merge::merge;
 pub use stats::RunStats;
 
 use std::collections::HashSet;
@@ -40,41 +33,14 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 
-use crate::output::spectrum::{SpectrumPlan, Window};
-use crate::output::{ChunkEncoder, Status, StudyWriter};
+use crate::output::{
+    new_journal_path, side_paths, study_layout, ChunkEncoder, DataFile, Status, StudyFingerprint,
+    StudyWriter, REFERENCE_CHANNELS,
+};
+use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::simulate::{simulate, CaseOutput};
+use crate::study::Shard;
 use crate::study::Study;
-
-/// A part of a study: shard `k` of `n` (1-based).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Shard {
-    /// This shard, 1..=n.
-    pub k: u64,
-    /// Number of shards.
-    pub n: u64,
-}
-
-impl std::str::FromStr for Shard {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let err = || format!("`{s}` is not a shard: expected K/N with 1 <= K <= N, e.g. 3/8");
-        let (k, n) = s.split_once('/').ok_or_else(err)?;
-        let (k, n): (u64, u64) = (
-            k.trim().parse().map_err(|_| err())?,
-            n.trim().parse().map_err(|_| err())?,
-        );
-        if k == 0 || n == 0 || k > n {
-            return Err(err());
-        }
-        Ok(Self { k, n })
-    }
-}
-
-impl std::fmt::Display for Shard {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}/{}", self.k, self.n)
-    }
-}
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -111,20 +77,6 @@ pub struct RunSummary {
     pub wall_time: f64,
     /// Where the CPU time went and whether the workers waited for the writer.
     pub stats: RunStats,
-}
-
-/// The journal and partial-file paths that belong to `output` (the partial file a
-/// fresh run writes; a resumed run may write [`DataFile::Resumed`]).
-pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
-    (
-        with_suffix(output, ".journal"),
-        DataFile::Partial.path(output),
-    )
-}
-
-/// Where a resume writes the journal that replaces `output`'s (`OUT.h5.journal.new`).
-fn new_journal_path(output: &Path) -> PathBuf {
-    with_suffix(output, ".journal.new")
 }
 
 /// What a scoped thread returned; its panic goes on in this thread.
@@ -464,7 +416,6 @@ fn send<T>(tx: &SyncSender<T>, record: T, tally: &WorkerTally) -> Result<(), Sen
     }
 }
 
-use journal::with_suffix;
 use order::dispatch_order;
 use progress::Progress;
 use stats::{thread_cpu, WorkerTally};

@@ -25,7 +25,7 @@ use super::output::{Samples, StepEnds};
 use super::tableau::{SdirkTableau, SDIRK4};
 use super::{OdeSystem, SolveError, Stats};
 use crate::error::ModelError;
-use crate::linalg::Lu;
+use crate::numeric::linalg::Lu;
 
 /// Most simplified-Newton iterations per stage.
 const MAX_NEWTON: usize = 7;

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use studyrun::bearing::{BearingParams, DampingModel, RaceWaviness};
 use studyrun::error::ModelError;
-use studyrun::mechanism::{CaseParams, Location, Sample, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, Sample};
 use studyrun::multibody::{ForceElement, Ledger};
 use studyrun::solve::{integrate, Method, OdeSystem, SolveError, SolverSettings, Stats};
 
@@ -18,7 +18,7 @@ use studyrun::solve::{integrate, Method, OdeSystem, SolveError, SolverSettings, 
 /// times, and the longest run of right-hand-side evaluations between two accepted
 /// steps (which counts the attempts of rejected steps in between).
 pub struct Probe {
-    pub mech: SliderCrank,
+    pub mech: CartesianSliderCrank,
     pub accepted: Vec<f64>,
     evals_since_accept: u64,
     pub max_evals_between_accepts: u64,
@@ -85,7 +85,7 @@ pub fn run_case(
     settings: &SolverSettings,
     times: &[f64],
 ) -> Result<Run, SolveError> {
-    let mech = SliderCrank::new(case)
+    let mech = CartesianSliderCrank::new(case)
         .expect("valid case")
         .with_energy_ledger(true);
     let mut probe = Probe {

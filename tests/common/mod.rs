@@ -1,6 +1,8 @@
 //! Closed forms shared by the physics tests.
 #![allow(dead_code)]
 
+pub mod hard;
+
 /// Closed-form kinematics of the ideal slider-crank at crank angle `th` (rad) and
 /// constant speed `w` (rad/s): positions, velocities and accelerations of the
 /// crank, rod and slider centres of mass, and the rod's angle, rate and

@@ -20,7 +20,7 @@
 // The constants are quoted digit for digit as fdlibm prints them.
 #![allow(clippy::excessive_precision)]
 
-use crate::simd::{F64x4, Lanes};
+use crate::numeric::simd::{F64x4, Lanes};
 
 /// Largest `|x|` (rad) the three-part reduction keeps exact: about `2¹⁹·π/2`, where
 /// the quadrant `q` has at most 19 bits and `q·PIO2_1`, `q·PIO2_2` are exact.
@@ -216,7 +216,7 @@ impl AffineSinCos {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::simd::{dispatch, Isa, LaneTask};
+    use crate::numeric::simd::{dispatch, Isa, LaneTask};
 
     /// `sin_cos4` on the lanes the CPU runs, checked bit for bit against the
     /// baseline and the portable lanes.

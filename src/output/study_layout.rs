@@ -2,13 +2,12 @@
 
 use anyhow::Result;
 
-use super::case::{metric_specs, reference_specs};
-use super::journal::fnv1a;
-use super::Shard;
-use crate::output::spectrum::frequencies;
 use crate::output::{provenance, Layout, Param, ParamValues, Storage, VarSpec};
+use crate::signal::metric_specs;
+use crate::signal::spectrum::frequencies;
 use crate::simulate::CHANNELS;
 use crate::study::params::PARAMETERS;
+use crate::study::Shard;
 use crate::study::Study;
 
 /// Version of the conventions of MODEL.md this engine implements (sign of the crank
@@ -144,4 +143,44 @@ pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
             deflate_level: study.compression,
         },
     })
+}
+
+/// FNV-1a, 64 bit: the study fingerprint.
+pub fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for part in parts {
+        for &b in *part {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// The reference series stored per ideal run: the channels an ideal mechanism has.
+pub const REFERENCE_CHANNELS: [&str; 6] = [
+    "slider_acceleration",
+    "crank_moment",
+    "crank_ground_force_x",
+    "crank_ground_force_y",
+    "crank_rod_force_x",
+    "crank_rod_force_y",
+];
+
+/// The [`VarSpec`]s of the reference series (`reference_<channel>`).
+pub fn reference_specs() -> Vec<VarSpec> {
+    REFERENCE_CHANNELS
+        .iter()
+        .map(|name| {
+            let ch = CHANNELS
+                .iter()
+                .find(|c| c.name == *name)
+                .expect("reference channels exist");
+            VarSpec::new(
+                format!("reference_{name}"),
+                ch.units,
+                format!("ideal mechanism: {}", ch.long_name),
+            )
+        })
+        .collect()
 }

@@ -1,0 +1,259 @@
+//! The slider-crank of MODEL.md §1 with the bearing at `crank_ground`, at
+//! `crank_rod`, or nowhere (`ideal`).
+//!
+//! Bodies: crank (0), connecting rod (1), slider (2); coordinates
+//! `q = (x2, y2, θ2, x3, y3, θ3, x4, y4, θ4)`. The crank pivot is the origin, the
+//! slider runs on the x axis, and the crank is driven at `θ2 = ω t`.
+
+use super::{CaseParams, Location, Sample, GRAVITY};
+use crate::bearing::{BallBearing, Mounting};
+use crate::error::{ModelError, ParamError};
+use crate::multibody::{Body, BodyRef, Constraint, System};
+
+const CRANK: BodyRef = BodyRef::Moving(0);
+const ROD: BodyRef = BodyRef::Moving(1);
+const SLIDER: BodyRef = BodyRef::Moving(2);
+/// Index of the slider's x coordinate in `q`.
+const SLIDER_X: usize = 6;
+
+/// A slider-crank case ready to integrate: the system, its initial state and
+/// where to read the outputs.
+#[derive(Debug, Clone)]
+pub struct CartesianSliderCrank {
+    system: System<BallBearing>,
+    location: Location,
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    driver_row: usize,
+    /// Row of the remaining ideal revolute at crank–ground or crank–rod (if any).
+    crank_ground_row: Option<usize>,
+    crank_rod_row: Option<usize>,
+}
+
+impl CartesianSliderCrank {
+    /// Builds the case; refuses invalid parameters with the field named.
+    pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
+        case.validate()?;
+        let mp = &case.mechanism;
+        let (l2, l3) = (mp.crank_length, mp.rod_length);
+        let bodies = vec![
+            Body {
+                mass: mp.crank_mass,
+                inertia: mp.crank_inertia,
+            },
+            Body {
+                mass: mp.rod_mass,
+                inertia: mp.rod_inertia,
+            },
+            Body {
+                mass: mp.slider_mass,
+                inertia: mp.slider_inertia,
+            },
+        ];
+        let crank_ground = Constraint::Revolute {
+            i: BodyRef::Ground,
+            s_i: [0.0, 0.0],
+            j: CRANK,
+            s_j: [-0.5 * l2, 0.0],
+        };
+        let crank_rod = Constraint::Revolute {
+            i: CRANK,
+            s_i: [0.5 * l2, 0.0],
+            j: ROD,
+            s_j: [-0.5 * l3, 0.0],
+        };
+        let common = [
+            Constraint::Revolute {
+                i: ROD,
+                s_i: [0.5 * l3, 0.0],
+                j: SLIDER,
+                s_j: [0.0, 0.0],
+            },
+            Constraint::Translational {
+                i: BodyRef::Ground,
+                s_i: [0.0, 0.0],
+                n_i: [0.0, 1.0],
+                j: SLIDER,
+                s_j: [0.0, 0.0],
+                theta0: 0.0,
+            },
+            Constraint::Driver {
+                body: CRANK,
+                theta0: 0.0,
+                omega: case.omega(),
+            },
+        ];
+        let gravity = case.gravity.then_some(GRAVITY);
+
+        // The ideal mechanism gives the initial positions and velocities (paper Table 3).
+        let q_nominal = vec![
+            0.5 * l2,
+            0.0,
+            0.0,
+            l2 + 0.5 * l3,
+            0.0,
+            0.0,
+            l2 + l3,
+            0.0,
+            0.0,
+        ];
+        let mut ideal_constraints = vec![crank_ground, crank_rod];
+        ideal_constraints.extend(common);
+        let mut ideal = System::new(
+            bodies.clone(),
+            ideal_constraints,
+            Vec::new(),
+            gravity,
+            Vec::new(),
+        )?;
+        ideal.initial_state(&q_nominal, &[0.0; 9]);
+        ideal
+            .evaluate(0.0, &[], false)
+            .map_err(|e| ParamError::new("mechanism", "initial configuration", e.to_string()))?;
+        let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
+
+        let (kept, independent, bearing) = match case.location {
+            Location::Ideal => {
+                return Ok(Self::assemble(
+                    ideal,
+                    case.location,
+                    q0,
+                    qd0,
+                    Some(0),
+                    Some(1),
+                ))
+            }
+            Location::CrankGround => {
+                let mount = Mounting {
+                    housing: BodyRef::Ground,
+                    housing_point: [0.0, 0.0],
+                    journal: CRANK,
+                    journal_point: [-0.5 * l2, 0.0],
+                    housing_theta0: 0.0,
+                    journal_theta0: q0[2],
+                };
+                (
+                    crank_rod,
+                    vec![0, 1],
+                    BallBearing::new(&case.bearing, mount)?,
+                )
+            }
+            Location::CrankRod => {
+                let mount = Mounting {
+                    housing: CRANK,
+                    housing_point: [0.5 * l2, 0.0],
+                    journal: ROD,
+                    journal_point: [-0.5 * l3, 0.0],
+                    housing_theta0: q0[2],
+                    journal_theta0: q0[5],
+                };
+                (
+                    crank_ground,
+                    vec![3, 4],
+                    BallBearing::new(&case.bearing, mount)?,
+                )
+            }
+        };
+        let mut constraints = vec![kept];
+        constraints.extend(common);
+        let system = System::new(bodies, constraints, vec![bearing], gravity, independent)?;
+        let (cg, cr) = match case.location {
+            Location::CrankGround => (None, Some(0)),
+            _ => (Some(0), None),
+        };
+        Ok(Self::assemble(system, case.location, q0, qd0, cg, cr))
+    }
+
+    fn assemble(
+        system: System<BallBearing>,
+        location: Location,
+        q0: Vec<f64>,
+        qd0: Vec<f64>,
+        crank_ground: Option<usize>,
+        crank_rod: Option<usize>,
+    ) -> Self {
+        let driver = system.constraint_row(if location == Location::Ideal { 4 } else { 3 });
+        Self {
+            crank_ground_row: crank_ground.map(|k| system.constraint_row(k)),
+            crank_rod_row: crank_rod.map(|k| system.constraint_row(k)),
+            driver_row: driver,
+            system,
+            location,
+            q0,
+            qd0,
+        }
+    }
+
+    /// Turns the energy ledger of the underlying system on or off.
+    #[must_use]
+    pub fn with_energy_ledger(mut self, on: bool) -> Self {
+        self.system = self.system.with_energy_ledger(on);
+        self
+    }
+
+    /// Where the bearing sits.
+    pub fn location(&self) -> Location {
+        self.location
+    }
+
+    /// Initial positions `q(0)` of the ideal mechanism (m, rad).
+    pub fn initial_positions(&self) -> &[f64] {
+        &self.q0
+    }
+
+    /// The integrator's initial state: the independent coordinates and their rates
+    /// from the ideal mechanism (zero eccentricity), plus the ledger if on.
+    pub fn initial_state(&mut self) -> Vec<f64> {
+        self.system.initial_state(&self.q0, &self.qd0)
+    }
+
+    /// The underlying multibody system (the ODE the integrators advance).
+    pub fn system(&self) -> &System<BallBearing> {
+        &self.system
+    }
+
+    /// Mutable access to the underlying system, e.g. to hand it to an integrator.
+    pub fn system_mut(&mut self) -> &mut System<BallBearing> {
+        &mut self.system
+    }
+
+    /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
+        self.system.evaluate(t, y, true)?;
+        Ok(self.read_sample())
+    }
+
+    /// The outputs from the system's last evaluation with multipliers.
+    pub fn read_sample(&self) -> Sample {
+        let s = &self.system;
+        let lambda = s.lambda();
+        let joint = |row: Option<usize>| row.map(|r| [lambda[r], lambda[r + 1]]);
+        let reaction = s
+            .elements()
+            .first()
+            .map(|b| b.reaction())
+            .unwrap_or_default();
+        Sample {
+            slider_acceleration: s.qdd()[SLIDER_X],
+            crank_moment: -lambda[self.driver_row],
+            crank_ground_force: joint(self.crank_ground_row).unwrap_or(reaction.force),
+            crank_rod_force: joint(self.crank_rod_row).unwrap_or(reaction.force),
+            eccentricity: reaction.eccentricity,
+            loaded_balls: reaction.loaded_balls,
+        }
+    }
+}
+
+impl crate::solve::OdeSystem for CartesianSliderCrank {
+    fn dim(&self) -> usize {
+        self.system.dim()
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+        self.system.rhs(t, y, dydt)
+    }
+
+    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        self.system.accept_step(t, y)
+    }
+}

@@ -1,0 +1,69 @@
+//! The files that belong to one result file `OUT.h5`: the partial files a run
+//! writes before the final rename, and the crash journal.
+
+use std::path::{Path, PathBuf};
+
+/// Which of the two partial files a journal's chunks lie in; a resumed run writes the
+/// other one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DataFile {
+    /// `OUT.h5.partial`, where a fresh run writes.
+    Partial,
+    /// `OUT.h5.partial.resumed`.
+    Resumed,
+}
+
+impl DataFile {
+    /// The partial file of this name for the result file `output`.
+    pub fn path(self, output: &Path) -> PathBuf {
+        with_suffix(
+            output,
+            match self {
+                Self::Partial => ".partial",
+                Self::Resumed => ".partial.resumed",
+            },
+        )
+    }
+
+    /// The other partial file: where a run resumed from this one writes.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Partial => Self::Resumed,
+            Self::Resumed => Self::Partial,
+        }
+    }
+
+    pub(crate) fn code(self) -> u8 {
+        match self {
+            Self::Partial => 0,
+            Self::Resumed => 1,
+        }
+    }
+
+    pub(crate) fn from_code(code: u8) -> Option<Self> {
+        [Self::Partial, Self::Resumed]
+            .into_iter()
+            .find(|d| d.code() == code)
+    }
+}
+
+/// `path` with `suffix` appended to its file name.
+pub fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+/// The journal and partial-file paths that belong to `output` (the partial file a
+/// fresh run writes; a resumed run may write [`DataFile::Resumed`]).
+pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
+    (
+        with_suffix(output, ".journal"),
+        DataFile::Partial.path(output),
+    )
+}
+
+/// Where a resume writes the journal that replaces `output`'s (`OUT.h5.journal.new`).
+pub fn new_journal_path(output: &Path) -> PathBuf {
+    with_suffix(output, ".journal.new")
+}

@@ -1,0 +1,22 @@
+//! The integration tests, in one binary: one module per subject.
+
+mod common;
+
+mod accuracy;
+mod bearing_limits;
+mod cage_angle;
+mod cli;
+mod constraints;
+mod convergence;
+mod energy;
+mod events;
+mod grid;
+mod hard_cases;
+mod harris;
+mod hdf5_file;
+mod ideal_mechanism;
+mod integrators;
+mod isa;
+mod parity;
+mod properties;
+mod validation;
