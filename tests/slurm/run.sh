@@ -13,15 +13,16 @@
 #      (`sbatch --array=2`) and resumes too; the merge is a job with
 #      --dependency=afterok on the requeued task and on the resubmitted job;
 #   4. resubmits a finished task: it must leave its file as it is;
-#   5. a 3-task array over a 2-case study (task 3 has no case: an empty shard;
-#      --cpus-per-task=2, so -j 2), merged by a job with --dependency=afterok on the array;
+#   5. a 3-task array over a 2-case study whose case 0 fails (the tasks exit 0 by
+#      --allow-failed) and whose task 3 has no case (an empty shard), --cpus-per-task=2
+#      (-j 2), merged by a job with --dependency=afterok on the whole array;
 #   6. checks each merged file equals a single run of its study value for value (every
 #      variable but wall_time, the attributes but created/history/git_commit);
 #   7. stops its daemons (and any job still running) by pid, also when it fails.
 #
 # Exit status: 0 passed; 77 skipped (not root, no apt/dpkg, the packages cannot be
 # installed), with "slurm test: skipped: <reason>"; anything else failed, after the
-# daemons' logs and the jobs' output. Takes about two minutes on two cores.
+# daemons' logs and the jobs' output. Takes 65-90 s on two cores (plus the install).
 #
 # Environment: STUDYRUN, the binary (default target/release/studyrun, built with
 # `cargo build --release --locked` if missing); PYTHON, a Python with h5py (default
@@ -69,7 +70,7 @@ if ! "$PYTHON" -c 'import h5py' 2>/dev/null; then
   "$PYTHON" -c 'import h5py' 2>/dev/null || packages+=(python3-h5py)
 fi
 
-# --- the packages ---------------------------------------------------------------------
+# --- cleanup, on every exit: jobs, daemons (by pid), policy-rc.d, the directory -------
 cleanup() {
   local rc=$?
   trap - EXIT INT TERM
@@ -137,6 +138,7 @@ show_logs() {
   done
 }
 
+# --- the packages ---------------------------------------------------------------------
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'ok installed'; }
 missing=()
 for p in "${packages[@]}"; do installed "$p" || missing+=("$p"); done
