@@ -213,7 +213,7 @@ def spectra(
 ):
     """Amplitude spectra of `channel` (stored `<channel>_spectrum`, transient ≤ t < duration,
     Hann window) per ball count, the ideal mechanism's spectrum in grey, and the
-    characteristic frequencies of MODEL.md §4 marked (see analysis.frequencies):
+    characteristic frequencies of docs/model.md §7.3 marked (see analysis.frequencies):
     cage f_c, ball pass N_b f_out and N_b f_in, waviness N_o f_out and N_i f_in.
     Both axes are logarithmic (frequency from the first bin above 0 Hz).
 
@@ -316,7 +316,7 @@ def _lines(ax, ds, data, x_axis, line_axis):
 
 
 def metrics_view(ds, metric, x_axis, y_axis, out, select=None, dpi=90):
-    """A per-case metric (e.g. slider_acceleration_rms_deviation, MODEL.md §6, in the
+    """A per-case metric (e.g. slider_acceleration_rms_deviation, docs/model.md §6, in the
     metric's units) over grid axes, written to the PNG `out`: a heatmap over
     x_axis × y_axis, or with y_axis=None lines against x_axis, one per ball count (or per the first other
     axis). Remaining grid axes with several values become facets sharing one colour

@@ -1,4 +1,4 @@
-"""Characteristic frequencies of the ball bearing (MODEL.md section 4).
+"""Characteristic frequencies of the ball bearing (docs/model.md section 7.3).
 
 Rolling without slip, the cage turns at ω_m = (ω_i d_i + ω_o d_o)/(d_i + d_o)
 (rad/s) with ω_i, ω_o the mean speeds of the inner and outer race. Balls pass a

@@ -111,7 +111,7 @@ def slug(ds, params):
 
 def render_metrics(ds, cases, outdir, index, dpi):
     """The metrics views of the bearing cases into `outdir`, listed in `index`."""
-    index.section("Vibration metrics (MODEL.md §6)")
+    index.section("Vibration metrics (docs/model.md §6)")
     axes = varying_axes(ds, cases)
     if not axes:
         index.note("No grid axis varies among the bearing cases: no metrics view.")

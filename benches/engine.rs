@@ -7,7 +7,7 @@
 //!   per effect (what each effect costs), with all effects also on the SSE2
 //!   baseline (`all_sse2`), and of the general Cartesian core for the gain of the
 //!   specialisation;
-//! - `sample/...`: one output sample (all of MODEL.md §3), also on the baseline;
+//! - `sample/...`: one output sample (all of docs/model.md §5.2), also on the baseline;
 //! - `case/...`: one whole paper case, and the ideal mechanism;
 //! - `encode/...`: the paper case's 12 series encoded into the chunks the study file
 //!   stores (shuffle, then deflate at level 1), the workers' share of the output cost.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent SciPy baseline for studyrun: one paper case in minimal coordinates.
 
-Case (MODEL.md, paper Example 1): bearing at crank_ground, 300 rpm, 9 balls,
+Case (docs/model.md, paper Example 1): bearing at crank_ground, 300 rpm, 9 balls,
 waviness N = 35, 4 um on both races, diametral clearance P_d = 40 um,
 K = 9.57e9 N/m^1.5, C = 300 N s/m compression-only damping, no gravity,
 0.4 s simulated, outputs at 50 kHz (20 001 samples). Integrator: SciPy
@@ -31,9 +31,9 @@ closed-form kinematics -- no constraint equations, no DAE, no drift.
   Mbar = sum_k J_k^T M_k J_k and h = sum_k J_k^T M_k b_k:
       Mbar pddot + h = Qbar + (0, 0, tau)
   where Qbar is the generalised applied force and tau the torque the driver applies
-  to the crank (the "crank moment", = -lambda_driver of MODEL.md). With thdd = 0 the
+  to the crank (the "crank moment", = -lambda_driver of docs/model.md). With thdd = 0 the
   first two rows give eddot (a 2x2 solve); the third row then gives tau.
-* Bearing (MODEL.md section 2): cage angle phi_c = d_i th / (d_i + d_o) (outer race
+* Bearing (docs/model.md section 2): cage angle phi_c = d_i th / (d_i + d_o) (outer race
   on the ground), ball r at phi_r = 2 pi (r-1)/N_b + phi_c, n_r = (cos, sin) phi_r,
   Pi_i = Pi_p sin(N psi_in), psi_in = phi_r - th; Pi_o = Pi_p sin(N psi_out),
   psi_out = phi_r; delta_r = e.n_r - P_d/2 + Pi_i + Pi_o; F_r = K delta^1.5 +
@@ -48,7 +48,7 @@ Initial conditions: e = 0, edot = 0 (the ideal mechanism: crank CoM velocity
 Outputs at t_k = k / 50 kHz from the dense output (state interpolated, outputs
 recomputed from the state): slider acceleration x4dd, crank moment tau, |F|.
 
-Checks: ``--energy`` closes MODEL.md section 8's balance W_driver = dKE + dV -
+Checks: ``--energy`` closes docs/model.md section 4.4's balance W_driver = dKE + dV -
 int dV/dt|_e dt (+ E_damped) to ~1e-11 of the driver work (C = 300 and C = 0);
 at LSODA rtol 1e-11 the outputs agree with studyrun's DOPRI5 at rtol 1e-12 to ~2e-7
 of each channel's range over the whole 0.4 s.
@@ -60,7 +60,7 @@ Usage:
         (TIGHT.h5: studyrun on the same case at rtol 1e-12; splits the difference into
         each integrator's own error)
     python benches/scipy_baseline.py --rtol 1e-11 --atol 1e-14 ...   # other tolerances
-    python benches/scipy_baseline.py --energy      # energy balance check (MODEL.md s. 8)
+    python benches/scipy_baseline.py --energy      # energy balance check (docs/model.md §4.4)
 """
 
 import argparse
@@ -374,7 +374,7 @@ def reference_check(res, study_path, tight_path, case=0):
 
 
 def energy_check(rtol=1e-11, atol=1e-14, duration=0.1):
-    """MODEL.md section 8: W_driver = dKE + dV - int dV/dt|_e dt + E_damped, with the
+    """docs/model.md section 4.4: W_driver = dKE + dV - int dV/dt|_e dt + E_damped, with the
     three integrals carried as extra ODE states (so the residual measures the model
     and the integrator, not a quadrature), for C = 300 and C = 0."""
     for damping in (C, 0.0):

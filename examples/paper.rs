@@ -1,5 +1,5 @@
-//! The paper's numerical study (MODEL.md §5): 32 bearing cases and the ideal
-//! mechanism at 300 and 600 rpm, with the vibration metrics of MODEL.md §6 and a
+//! The paper's numerical study (docs/model.md §6): 32 bearing cases and the ideal
+//! mechanism at 300 and 600 rpm, with the vibration metrics of docs/model.md §6 and a
 //! check of the paper's three findings.
 //!
 //! Run: `cargo run --release --example paper`

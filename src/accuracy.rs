@@ -5,7 +5,7 @@
 //! rtol 1e-10: where the two agree the reference's own error is below their
 //! difference. The first time their slider accelerations differ by more than
 //! [`HORIZON_THRESHOLD`] of its range is the case's **predictability horizon**
-//! (MODEL.md §8: chaotic cases part after tens of milliseconds); if they never do,
+//! (docs/model.md §9.2: chaotic cases part after tens of milliseconds); if they never do,
 //! the horizon is the whole run.
 //!
 //! **Errors** per channel (slider acceleration, crank moment, bearing force): the
@@ -320,7 +320,7 @@ pub fn run(
 /// The cheapest setting (least total wall time over the judged cases) whose metric
 /// error stays below `bound` on every **non-chaotic** case: one whose two reference
 /// runs never part (horizon = the whole run). On a chaotic case the metric over a
-/// short window is not a reproducible number (MODEL.md §8): any perturbation, a
+/// short window is not a reproducible number (docs/model.md §9.2): any perturbation, a
 /// tolerance change included, moves it by several per cent, so no setting can be
 /// judged on it to `bound`; such cases need statistics over many revolutions.
 /// Returns the setting and the number of cases that judged it.

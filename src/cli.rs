@@ -37,7 +37,8 @@ Examples:
   studyrun accuracy grid.yaml --methods tsit5      only one integrator's settings
   studyrun accuracy grid.yaml --rtols 1e-7,5e-8    the adaptive methods at these rtols
 
-Exit codes: 0 all cases ok; 1 error (I/O, HDF5); 2 invalid input; 3 finished, some cases failed.
+Exit codes: 0 all cases ok (or some failed, with --allow-failed); 1 error (I/O, HDF5,
+output in use by another process); 2 invalid input; 3 finished, some cases failed.
 
 Environment: STUDYRUN_ISA=baseline runs the hot paths on SSE2 instead of AVX (the
 results are the same bits; for speed comparisons); unset, the widest the CPU has.";
@@ -126,6 +127,10 @@ struct RunArgs {
     /// Print the case table and the estimated size and time; run nothing.
     #[arg(long)]
     dry_run: bool,
+    /// Exit 0 (not 3) when the study finished and some cases failed: they are
+    /// recorded in the file. For job scripts whose next step depends on success.
+    #[arg(long)]
+    allow_failed: bool,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -171,14 +176,16 @@ pub fn main() -> ExitCode {
             output,
             shards,
             force,
-        }) => output::merge(&output, &shards, force).map(|n| {
-            println!(
-                "merged {} shard files into {} ({n} cases)",
-                shards.len(),
-                output.display()
-            );
-            EXIT_OK
-        }),
+        }) => output::merge(&output, &shards, force)
+            .map_err(anyhow::Error::from)
+            .map(|n| {
+                println!(
+                    "merged {} shard files into {} ({n} cases)",
+                    shards.len(),
+                    output.display()
+                );
+                EXIT_OK
+            }),
     };
     match outcome {
         Ok(code) => ExitCode::from(code),
@@ -188,10 +195,24 @@ pub fn main() -> ExitCode {
             } else {
                 EXIT_ERROR
             };
-            eprintln!("studyrun: error: {e:#}");
+            eprintln!("studyrun: error: {}", describe(&e));
             ExitCode::from(code)
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: a cause whose text the
+/// message already holds is not repeated.
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
 }
 
 fn load(grid: &Path) -> Result<Study> {
@@ -221,6 +242,20 @@ fn run_command(args: RunArgs) -> Result<u8> {
         quiet: args.quiet,
     };
     let summary = run::run(&study, &opts)?;
+    if summary.complete_before {
+        eprintln!(
+            "studyrun: {} already holds this study's complete result ({} cases: {} ok, {} failed); nothing to do",
+            output.display(),
+            summary.cases,
+            summary.ok,
+            summary.failed
+        );
+        return Ok(if summary.failed > 0 && !args.allow_failed {
+            EXIT_CASES_FAILED
+        } else {
+            EXIT_OK
+        });
+    }
     if args.timings {
         eprintln!("{}", summary.stats);
     }
@@ -246,7 +281,7 @@ fn run_command(args: RunArgs) -> Result<u8> {
             summary.rerun
         );
     }
-    Ok(if summary.failed > 0 {
+    Ok(if summary.failed > 0 && !args.allow_failed {
         EXIT_CASES_FAILED
     } else {
         EXIT_OK

@@ -2,7 +2,7 @@
 //!
 //! Parameter studies of a deep-groove ball bearing with raceway waviness inside a
 //! planar slider-crank (Xu & Li, Multibody Syst Dyn 2014). The physics is specified
-//! in `MODEL.md` (shipped beside the repository as `../shared/MODEL.md`).
+//! in `docs/model.md` (shipped beside the repository as `docs/model.md`).
 //!
 //! The data's path through the crate:
 //!
@@ -12,7 +12,7 @@
 //!    reference it is tested against, and carries the energy ledger.
 //! 2. [`solve`] integrates it with an adaptive explicit pair (locating the contact
 //!    switches and restarting there), fixed-step RK4 or an implicit SDIRK method.
-//! 3. [`simulate`] samples the outputs of MODEL.md §3 at exact sample times and
+//! 3. [`simulate`] samples the outputs of docs/model.md §5.2 at exact sample times and
 //!    [`metrics`] turns them into vibration measures against the ideal mechanism.
 //!
 //! Units are SI throughout (m, kg, s, N, rad) unless a name says otherwise.

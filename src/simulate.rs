@@ -1,5 +1,5 @@
 //! Running one case: integrate a [`SliderCrank`] and sample the outputs of
-//! MODEL.md §3 at exact, uniformly spaced sample times. The ideal mechanism has no
+//! docs/model.md §5.2 at exact, uniformly spaced sample times. The ideal mechanism has no
 //! state and is sampled in closed form, without an integrator.
 
 use std::ops::Range;

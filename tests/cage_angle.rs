@@ -6,7 +6,7 @@ use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
 /// The mechanism with one more state, `φ_int`, whose derivative is the rolling
-/// kinematics' cage speed ω_m = (d_i ω_i + d_o ω_o)/(d_i + d_o) (MODEL.md §2).
+/// kinematics' cage speed ω_m = (d_i ω_i + d_o ω_o)/(d_i + d_o) (docs/model.md §2).
 struct WithCageQuadrature {
     mech: CartesianSliderCrank,
     d_i: f64,

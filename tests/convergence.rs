@@ -121,7 +121,7 @@ fn rk4_has_order_four_and_pair_errors_fall_with_tolerance_on_a_smooth_problem() 
 
 /// A non-chaotic paper case (crank_rod, 600 rpm, 9 balls, waviness 4 µm on both
 /// races; DOPRI5 at 1e-9, 1e-10, 1e-11 differ from 1e-12 by 4e-5, 1.4e-5, 4e-6 of
-/// range over 0.2 s, see MODEL.md §8), two revolutions, against DOPRI5 at 1e-12.
+/// range over 0.2 s, see docs/model.md §9.2), two revolutions, against DOPRI5 at 1e-12.
 /// Measure: the largest pointwise difference relative to the channel's range, which
 /// impact spikes dominate (a small shift in an impact's timing shows up in full).
 /// - DOPRI5 at 1e-9 agrees to 1e-3 (measured 4.3e-5 to 5.3e-5 over the three

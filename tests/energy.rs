@@ -1,4 +1,4 @@
-//! MODEL.md §8's energy balance: W_driver = ΔKE + ΔV − ∫∂V/∂t dt + E_dissipated.
+//! docs/model.md §4.4's energy balance: W_driver = ΔKE + ΔV − ∫∂V/∂t dt + E_dissipated.
 
 use studyrun::bearing::RaceWaviness;
 use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};

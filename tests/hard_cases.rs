@@ -1,4 +1,4 @@
-//! Hard cases of the bearing-in-a-slider-crank model (MODEL.md §2 and §8): extreme
+//! Hard cases of the bearing-in-a-slider-crank model (docs/model.md §2 and §8): extreme
 //! clearances, waviness, ball counts, speeds and stiffnesses, long runs, gravity,
 //! stiffness and contact onsets.
 //!
@@ -17,7 +17,7 @@
 //!   a journal heading between two balls travels further than P_d/2 before touching
 //!   them (with 3 balls, P_d). Without it the 3-ball case breaks the bound (measured
 //!   |e| = 1.48 × (P_d/2 + ΣΠ + (max|F|/K)^{2/3})), as it must;
-//! - MODEL.md §8's energy balance `W_driver = ΔKE + ΔV − ∫∂V/∂t dt + E_diss`
+//! - docs/model.md §4.4's energy balance `W_driver = ΔKE + ΔV − ∫∂V/∂t dt + E_diss`
 //!   closes: largest |residual| over the run ≤ a stated fraction of the largest
 //!   |W_driver| of the run (each case states it: 1e-6 at rtol 1e-8, measured
 //!   ≤ 8e-8; 1e-8 at rtol 1e-10, measured ≤ 5e-9; looser for long runs at moderate
@@ -25,7 +25,7 @@
 //! - position residual < 1e-9 m and velocity residual < 1e-7 m/s at every sample
 //!   (measured ≤ 3e-17 m and ≤ 8e-15 m/s: coordinate partitioning leaves no drift);
 //! - two tolerances (or methods) agree, pointwise where the case is not chaotic,
-//!   over a short initial window where it is (MODEL.md §8.2: nearby trajectories
+//!   over a short initial window where it is (docs/model.md §4.4.2: nearby trajectories
 //!   separate exponentially once the journal bounces in the clearance), or in a
 //!   statistic (RMS of the slider acceleration) for long chaotic runs.
 //!

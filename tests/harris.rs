@@ -1,4 +1,4 @@
-//! Harris's ball–raceway stiffness (MODEL.md §2) against the paper's value, the
+//! Harris's ball–raceway stiffness (docs/model.md §2) against the paper's value, the
 //! Brewe–Hamrock approximations, Hertz theory in Johnson's form, and its limits.
 
 use studyrun::bearing::stiffness::{
@@ -31,7 +31,7 @@ fn skf_98205_total_stiffness_matches_paper() {
     assert_eq!(i.stiffness, k.inner);
     assert_eq!(o.stiffness, k.outer);
     assert!(rel(k.total, 9.57e9) < 0.02, "K = {:e}", k.total);
-    // MODEL.md: "≈ 9.7e9, within 1.5 % of the paper's 9.57e9".
+    // docs/model.md: "≈ 9.7e9, within 1.5 % of the paper's 9.57e9".
     assert!(rel(k.total, 9.7e9) < 0.01, "K = {:e}", k.total);
     assert!(rel(k.total, 9.57e9) < 0.015, "K = {:e}", k.total);
     // Series of two springs Q = K δ^{3/2}: the deflections add at equal load.

@@ -2,7 +2,7 @@
 //! reference (general Cartesian multibody core, scalar ball twin).
 //!
 //! 1. Pointwise: along a reference trajectory through impacts, every output of
-//!    MODEL.md §3 from the minimal model at the same `(t, e, ė)` equals the
+//!    docs/model.md §5.2 from the minimal model at the same `(t, e, ė)` equals the
 //!    reference's to 1e-9 of the channel's range, in every scene (both bearing
 //!    locations, waviness on both races with phases, both damping laws and none,
 //!    gravity, several ball counts) and for the ideal mechanism.

@@ -13,7 +13,7 @@
 //!   `|e| ≤ (P_d/2 + ΣΠ + (V_contact/(0.4K))^{2/5}) / cos(π/N_b)`, and within the
 //!   instantaneous force bound where that one is rigorous (P_d/2 ≥ ΣΠ,
 //!   compression-only damping or C = 0);
-//! - MODEL.md §8's energy balance closes: the largest |residual| over the run is at
+//! - docs/model.md §4.4's energy balance closes: the largest |residual| over the run is at
 //!   most 1e-6 of `max(max|W_driver|, 1e-3 · KE(0))`. The floor matters for slow
 //!   cases, where the driver does almost no work in 5 ms (30 rpm: |W| ~ 1e-6 J) but
 //!   the integration error still scales with the energies in the state;

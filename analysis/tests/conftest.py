@@ -35,17 +35,17 @@ def study_path(variable, how):
     return os.path.abspath(value)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def smoke_path():
     return study_path("STUDYRUN_SMOKE_FILE", "studyrun studies/smoke.yaml -o smoke.h5")
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def paper_path():
     return study_path("STUDYRUN_PAPER_FILE", "studyrun studies/paper.yaml -o paper.h5")
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def shard_paths():
     value = os.environ.get("STUDYRUN_SHARD_FILES")
     if not value:
@@ -59,18 +59,18 @@ def shard_paths():
     return [os.path.abspath(p) for p in paths]
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def merged_path():
     return study_path("STUDYRUN_MERGED_FILE", "studyrun merge merged.h5 s1.h5 s2.h5")
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def smoke(smoke_path):
     with open_study(smoke_path) as ds:
         yield ds.load()
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def paper(paper_path):
     with open_study(paper_path) as ds:
         yield ds

@@ -1,4 +1,4 @@
-"""Characteristic bearing frequencies (MODEL.md section 4)."""
+"""Characteristic bearing frequencies (docs/model.md section 7.3)."""
 
 import math
 

@@ -1,4 +1,4 @@
-//! The ball-force kernel: the sum `F = Σ_r F_r n_r` over the ball set of MODEL.md §2
+//! The ball-force kernel: the sum `F = Σ_r F_r n_r` over the ball set of docs/model.md §2
 //! for one bearing state, written for throughput.
 //!
 //! - Struct of arrays: per-ball base directions, offsets and waviness coefficients

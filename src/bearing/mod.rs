@@ -1,4 +1,4 @@
-//! The deep-groove ball bearing force element of MODEL.md §2.
+//! The deep-groove ball bearing force element of docs/model.md §2.
 //!
 //! A bearing joins a *housing* body (outer race) and a *journal* body (inner race).
 //! Ball `r` sits at the global angle `φ_r = 2π(r−1)/N_b + φ_c`, with the cage angle
@@ -164,7 +164,7 @@ pub struct BallBearing {
     reaction: BearingReaction,
 }
 
-/// The cage angle of MODEL.md §2 as weights of the race rotations.
+/// The cage angle of docs/model.md §2 as weights of the race rotations.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CageWeights {
     /// `d_i/(d_i+d_o)`, the weight of the journal's (inner race's) rotation.

@@ -1,5 +1,5 @@
 //! Ball–raceway contact stiffness from bearing geometry by Harris's method
-//! (MODEL.md §2 "Stiffness from geometry"; Xu & Li 2014, eqs. 26–27; Harris &
+//! (docs/model.md §2 "Stiffness from geometry"; Xu & Li 2014, eqs. 26–27; Harris &
 //! Kotzalas, *Rolling Bearing Analysis*).
 //!
 //! For a radial deep-groove ball bearing (contact angle 0) with ball diameter `D`,
@@ -213,14 +213,14 @@ pub struct HarrisStiffness {
     /// Ball–outer-raceway constant `K_o` (N/m^1.5).
     pub outer: f64,
     /// Both contacts in series, `K = (K_i^{−2/3} + K_o^{−2/3})^{−3/2}` (N/m^1.5):
-    /// the `K` of MODEL.md §2's ball force `F_r = K δ_r^{3/2}`.
+    /// the `K` of docs/model.md §2's ball force `F_r = K δ_r^{3/2}`.
     pub total: f64,
 }
 
 impl ContactGeometry {
     /// The SKF 98205 bearing of Xu & Li 2014 (Table 2): `D` = 8.70 mm,
     /// `d_m` = 37.90 mm, steel with `E` = 207 GPa and `ν` = 0.30, and groove
-    /// conformities `f_i = f_o` = 0.52 (not given in the paper; MODEL.md §2).
+    /// conformities `f_i = f_o` = 0.52 (not given in the paper; docs/model.md §2).
     pub fn skf_98205() -> Self {
         Self {
             ball_diameter: 8.70e-3,

@@ -1,4 +1,4 @@
-//! The slider-crank of MODEL.md §1 with the bearing at `crank_ground`, at
+//! The slider-crank of docs/model.md §1 with the bearing at `crank_ground`, at
 //! `crank_rod`, or nowhere (`ideal`).
 //!
 //! Bodies: crank (0), connecting rod (1), slider (2); coordinates
@@ -217,7 +217,7 @@ impl CartesianSliderCrank {
         &mut self.system
     }
 
-    /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    /// Evaluates the outputs of docs/model.md §5.2 at time `t` (s) and state `y`.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
         self.system.evaluate(t, y, true)?;
         Ok(self.read_sample())

@@ -52,7 +52,7 @@ impl FromStr for Location {
     }
 }
 
-/// Body parameters of the slider-crank (SI; defaults of MODEL.md §1).
+/// Body parameters of the slider-crank (SI; defaults of docs/model.md §1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MechanismParams {
     /// Crank length `L2` (m).
@@ -175,7 +175,7 @@ impl CaseParams {
     }
 }
 
-/// The outputs of MODEL.md §3 at one instant.
+/// The outputs of docs/model.md §5.2 at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Sample {
     /// Slider acceleration ẍ4 (m/s²).

@@ -1,4 +1,4 @@
-//! The slider-crank of MODEL.md §1 in minimal coordinates: the production model.
+//! The slider-crank of docs/model.md §1 in minimal coordinates: the production model.
 //!
 //! With the crank driven at `θ2 = ω t` and the slider on the x axis, a bearing case
 //! has two degrees of freedom, the bearing eccentricity `e = (ex, ey)`, and the
@@ -333,7 +333,7 @@ impl SliderCrank {
         Ok((kin, sum, k.eccentricity_acceleration(&kin, sum.force)))
     }
 
-    /// Evaluates the outputs of MODEL.md §3 at time `t` (s) and state `y`.
+    /// Evaluates the outputs of docs/model.md §5.2 at time `t` (s) and state `y`.
     /// The natural law applies (a ball is loaded when `δ > 0`) whatever regime an
     /// integrator holds.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {

@@ -1,6 +1,6 @@
 //! Force elements acting between two bodies.
 
-/// Energy terms of a force element, for the energy balance of MODEL.md §8:
+/// Energy terms of a force element, for the energy balance of docs/model.md §4.4:
 /// `W_driver = ΔKE + ΔV − ∫ ∂V/∂t dt + E_dissipated`.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ElementEnergy {

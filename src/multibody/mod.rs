@@ -12,7 +12,7 @@
 //! round-off, ~1e-16 m), and `u̇` from the velocity equation `Φu u̇ = −Φz ż − Φt`.
 //! Positions and velocities therefore satisfy the constraints to round-off at every
 //! step: there is no drift to control, and no Baumgarte parameters to tune. The
-//! accelerations follow from the index-1 system of MODEL.md §1 reduced to the
+//! accelerations follow from the index-1 system of docs/model.md §1 reduced to the
 //! independent coordinates, `(Bᵀ M B) z̈ = Bᵀ (Q − M c)` with `q̈ = B z̈ + c`;
 //! the multipliers from `Φuᵀ λ = (Q − M q̈)_u`. The drift actually left is
 //! measured by [`System::position_residual`] and [`System::velocity_residual`] and
@@ -23,7 +23,7 @@
 //! With [`System::with_energy_ledger`], three quadratures ride along in the state:
 //! the work of the rheonomic constraints (`∫ λᵀΦt dt`, the driver's work), the
 //! explicit-time term `∫ ∂V/∂t dt` of the force elements, and the energy they
-//! dissipate, so that MODEL.md §8's balance can be checked to integration accuracy.
+//! dissipate, so that docs/model.md §4.4's balance can be checked to integration accuracy.
 
 mod body;
 mod constraint;

@@ -134,6 +134,16 @@ pub enum AttrValue {
     I64(i64),
 }
 
+impl AttrValue {
+    /// The text of a string value.
+    pub fn as_text(&self) -> Option<&str> {
+        match self {
+            Self::Str(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
 impl From<&str> for AttrValue {
     fn from(s: &str) -> Self {
         Self::Str(s.to_owned())
@@ -236,7 +246,8 @@ impl Role {
 /// `[reference, ...]` variable follow `reference_ids`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
-    /// Global case ids (any distinct values, not necessarily `0..n`); at least one.
+    /// Global case ids (any distinct values, not necessarily `0..n`); none for an empty
+    /// shard.
     pub case_ids: Vec<u64>,
     /// Sample times of every series (s); non-empty if there are series.
     pub times: Vec<f64>,
@@ -296,9 +307,6 @@ impl Layout {
     pub fn validate(&self) -> Result<(), String> {
         let n_case = self.case_ids.len();
         let n_ref = self.reference_ids.len();
-        if n_case == 0 {
-            return Err(format!("`{CASE}` needs at least one case id"));
-        }
         if n_ref == 0 {
             return Err(format!("`{REFERENCE}` needs at least one reference id"));
         }

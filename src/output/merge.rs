@@ -2,43 +2,103 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, ensure, Context, Result};
+use super::{side_paths, OutputLock};
+use crate::error::RunError;
+use crate::output::{AttrValue, CaseRecord, Layout, ParamValues, Status, StudyReader, StudyWriter};
 
-use super::side_paths;
-use crate::output::{AttrValue, CaseRecord, Layout, ParamValues, StudyReader, StudyWriter};
+/// Refuses with `message` unless `ok`.
+fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), RunError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(RunError::Refused(message()))
+    }
+}
 
 /// Merges `shards` (files of `studyrun --shard K/N` runs of one study) into `output`.
-/// Every case of the study must be present exactly once. Returns the number of cases.
-pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize> {
-    ensure!(!shards.is_empty(), "merge needs at least one shard file");
+/// Every case of the study must be present exactly once, in finished shard files
+/// (no partial files, no pending cases); empty shards are allowed. Returns the
+/// number of cases.
+pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, RunError> {
+    ensure(!shards.is_empty(), || {
+        "merge needs at least one shard file".into()
+    })?;
+    for (k, p) in shards.iter().enumerate() {
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        ensure(!name.contains(".partial"), || {
+            format!(
+                "{} is the partial file of an unfinished run; finish it with --resume first",
+                p.display()
+            )
+        })?;
+        let same = |q: &PathBuf| match (std::fs::canonicalize(p), std::fs::canonicalize(q)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => p == q,
+        };
+        if let Some(q) = shards[..k].iter().find(|q| same(q)) {
+            return Err(RunError::Refused(format!(
+                "{} is given twice (also as {})",
+                p.display(),
+                q.display()
+            )));
+        }
+        ensure(!same(&output.to_path_buf()), || {
+            format!("{} is both a shard and the merged output", p.display())
+        })?;
+    }
+    let _lock = OutputLock::acquire(output)?;
     if output.exists() && !force {
-        bail!("{} exists; use --force to overwrite it", output.display());
+        return Err(RunError::Refused(format!(
+            "{} exists; use --force to overwrite it",
+            output.display()
+        )));
     }
     let readers: Vec<StudyReader> = shards
         .iter()
-        .map(|p| StudyReader::open(p).with_context(|| format!("cannot open shard {}", p.display())))
-        .collect::<Result<_>>()?;
+        .map(|p| StudyReader::open(p).map_err(RunError::file(p)))
+        .collect::<Result<_, _>>()?;
+    for (r, path) in readers.iter().zip(shards) {
+        let statuses = r.statuses().map_err(RunError::file(path))?;
+        let pending = statuses.iter().filter(|&&s| s == Status::Pending).count();
+        ensure(pending == 0, || {
+            format!(
+                "{} has {pending} pending cases: its run did not finish; finish it with --resume first",
+                path.display()
+            )
+        })?;
+    }
     let first = readers[0].layout();
     let attr = |r: &StudyReader, name: &str| r.attribute(name).cloned();
     for (r, path) in readers.iter().zip(shards).skip(1) {
-        ensure!(
+        ensure(
             attr(r, "study_fingerprint") == attr(&readers[0], "study_fingerprint"),
-            "{} belongs to a different study (or studyrun version) than {}",
-            path.display(),
-            shards[0].display()
-        );
+            || {
+                format!(
+                    "{} belongs to a different study (or studyrun version) than {}",
+                    path.display(),
+                    shards[0].display()
+                )
+            },
+        )?;
         let l = r.layout();
-        ensure!(
+        ensure(
             l.times == first.times
                 && l.frequencies == first.frequencies
                 && l.series == first.series
                 && l.spectra == first.spectra
                 && l.metrics == first.metrics
                 && l.reference_ids == first.reference_ids,
-            "{} has a different layout than {}",
-            path.display(),
-            shards[0].display()
-        );
+            || {
+                format!(
+                    "{} has a different layout than {}",
+                    path.display(),
+                    shards[0].display()
+                )
+            },
+        )?;
     }
     // (shard, row) of every case, sorted by case id.
     let mut order: Vec<(u64, usize, usize)> = readers
@@ -54,25 +114,28 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize> {
         .collect();
     order.sort_unstable();
     if let Some(w) = order.windows(2).find(|w| w[0].0 == w[1].0) {
-        bail!(
+        return Err(RunError::Refused(format!(
             "case {} is in both {} and {}",
             w[0].0,
             shards[w[0].1].display(),
             shards[w[1].1].display()
-        );
+        )));
     }
     let expected = match attr(&readers[0], "study_cases") {
         Some(AttrValue::I64(n)) => n as usize,
-        _ => bail!(
-            "{} has no study_cases attribute; is it a studyrun study file?",
-            shards[0].display()
-        ),
+        _ => {
+            return Err(RunError::Refused(format!(
+                "{} has no study_cases attribute; is it a studyrun study file?",
+                shards[0].display()
+            )))
+        }
     };
-    ensure!(
-        order.len() == expected,
-        "the shards hold {} of the study's {expected} cases; merge all shards",
-        order.len()
-    );
+    ensure(order.len() == expected, || {
+        format!(
+            "the shards hold {} of the study's {expected} cases; merge all shards",
+            order.len()
+        )
+    })?;
 
     let mut layout: Layout = first.clone();
     layout.case_ids = order.iter().map(|o| o.0).collect();
@@ -107,40 +170,47 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize> {
         };
     }
     for (name, value) in layout.attributes.iter_mut() {
-        if name == "file_cases" {
-            *value = AttrValue::I64(expected as i64);
+        match name.as_str() {
+            "file_cases" => *value = AttrValue::I64(expected as i64),
+            "shard" => *value = AttrValue::Str(String::new()),
+            _ => {}
         }
     }
     let (_, partial) = side_paths(output);
-    let mut writer = StudyWriter::create(&partial, &layout)
-        .with_context(|| format!("cannot create {}", partial.display()))?;
+    let to_partial = RunError::file(&partial);
+    let mut writer = StudyWriter::create(&partial, &layout).map_err(RunError::file(&partial))?;
     for k in 0..layout.reference_ids.len() {
-        let series = readers[0].read_reference(k)?;
+        let series = readers[0]
+            .read_reference(k)
+            .map_err(RunError::file(&shards[0]))?;
         let refs: Vec<&[f64]> = series.iter().map(Vec::as_slice).collect();
-        writer.write_reference(k, &refs)?;
+        writer
+            .write_reference(k, &refs)
+            .map_err(RunError::file(&partial))?;
     }
     for (row, &(_, s, src)) in order.iter().enumerate() {
-        let c = readers[s].read_case(src)?;
+        let c = readers[s]
+            .read_case(src)
+            .map_err(RunError::file(&shards[s]))?;
         let series: Vec<&[f64]> = c.series.iter().map(Vec::as_slice).collect();
         let spectra: Vec<&[f64]> = c.spectra.iter().map(Vec::as_slice).collect();
-        writer.write_case(
-            row,
-            &CaseRecord {
-                series: &series,
-                spectra: &spectra,
-                metrics: &c.metrics,
-                status: c.status,
-                message: &c.message,
-            },
-        )?;
+        writer
+            .write_case(
+                row,
+                &CaseRecord {
+                    series: &series,
+                    spectra: &spectra,
+                    metrics: &c.metrics,
+                    status: c.status,
+                    message: &c.message,
+                },
+            )
+            .map_err(RunError::file(&partial))?;
     }
-    writer.finish()?;
-    std::fs::rename(&partial, output).with_context(|| {
-        format!(
-            "cannot rename {} to {}",
-            partial.display(),
-            output.display()
-        )
-    })?;
+    writer.finish().map_err(to_partial)?;
+    std::fs::rename(&partial, output).map_err(RunError::io(
+        format!("rename {} to", partial.display()),
+        output,
+    ))?;
     Ok(order.len())
 }

@@ -50,6 +50,7 @@ mod encode;
 mod error;
 mod inspect;
 mod layout;
+mod lock;
 mod merge;
 mod paths;
 mod reader;
@@ -66,6 +67,7 @@ pub use layout::{
     provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
     ERROR_MESSAGE, FREQUENCY, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
 };
+pub use lock::OutputLock;
 pub use merge::merge;
 pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
 pub use reader::{CaseData, StudyReader};

@@ -1,7 +1,5 @@
 //! The study file's [`Layout`] for a study (or a shard of it).
 
-use anyhow::Result;
-
 use crate::output::{provenance, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::metric_specs;
 use crate::signal::spectrum::frequencies;
@@ -10,9 +8,14 @@ use crate::study::params::PARAMETERS;
 use crate::study::Shard;
 use crate::study::Study;
 
-/// Version of the conventions of MODEL.md this engine implements (sign of the crank
-/// moment, force on the housing, cage angle in closed form, decisions of §7).
-pub const MODEL_CONVENTIONS: &str = "MODEL.md (Xu & Li 2014 restated), decisions 7.1-7.5";
+/// The specification this engine implements: `docs/model.md` of this studyrun
+/// version (sign of the crank moment, force on the housing, cage angle in closed
+/// form, the modelling decisions of §10).
+pub const MODEL_CONVENTIONS: &str = concat!(
+    "docs/model.md of studyrun ",
+    env!("CARGO_PKG_VERSION"),
+    " (Xu & Li 2014 restated; decisions in section 10)"
+);
 
 /// Identifies a study run: grid text, studyrun version and shard. A journal or a
 /// shard file is only combined with others of the same study.
@@ -38,8 +41,9 @@ impl StudyFingerprint {
     }
 }
 
-/// The layout of the file for the cases at `rows` (indices into `study.cases`).
-pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
+/// The layout of the file for the cases at `rows` (indices into `study.cases`), the
+/// whole study or `shard` of it.
+pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layout {
     let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
     let n_window = study.analysis_window().len();
     let mut parameters: Vec<Param> = PARAMETERS
@@ -82,6 +86,10 @@ pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
         ("grid_axes".to_string(), study.axes.join(",").into()),
         ("study_cases".to_string(), (study.cases.len() as i64).into()),
         ("file_cases".to_string(), (shard_rows as i64).into()),
+        (
+            "shard".to_string(),
+            shard.map_or(String::new(), |s| s.to_string()).into(),
+        ),
         ("model_conventions".to_string(), MODEL_CONVENTIONS.into()),
         ("solver".to_string(), format!("{:?}", study.solver).into()),
         ("duration".to_string(), study.sampling.duration.into()),
@@ -108,7 +116,7 @@ pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
             StudyFingerprint::of(study, None).hex().into(),
         ),
     ]);
-    Ok(Layout {
+    Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.sampling.times(),
         frequencies: frequencies(n_window, study.sampling.sample_rate),
@@ -142,7 +150,7 @@ pub fn study_layout(study: &Study, rows: &[usize]) -> Result<Layout> {
             float32: study.float32,
             deflate_level: study.compression,
         },
-    })
+    }
 }
 
 /// FNV-1a, 64 bit: the study fingerprint.

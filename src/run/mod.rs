@@ -30,12 +30,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, SendError, SyncSender, TrySendError};
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 
+use crate::error::RunError;
 use crate::output::{
-    new_journal_path, side_paths, study_layout, ChunkEncoder, DataFile, Status, StudyFingerprint,
-    StudyWriter, REFERENCE_CHANNELS,
+    new_journal_path, side_paths, study_layout, ChunkEncoder, DataFile, Layout, OutputLock, Status,
+    StudyFingerprint, StudyReader, StudyWriter, REFERENCE_CHANNELS,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::simulate::{simulate, CaseOutput};
@@ -73,6 +73,9 @@ pub struct RunSummary {
     /// Cases the journal of an interrupted run recorded but whose chunks were not
     /// found intact in its partial file: run again.
     pub rerun: usize,
+    /// The output already held this study's complete result (a `--resume` of a
+    /// finished run): nothing ran.
+    pub complete_before: bool,
     /// Wall-clock time (s).
     pub wall_time: f64,
     /// Where the CPU time went and whether the workers waited for the writer.
@@ -87,24 +90,30 @@ fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
 }
 
 /// Removes the file at `path` if there is one.
-fn remove_if_exists(path: &Path) -> Result<()> {
+fn remove_if_exists(path: &Path) -> Result<(), RunError> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            Err(e).with_context(|| format!("cannot remove {}", path.display()))
-        }
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(RunError::io("remove", path)(e)),
         _ => Ok(()),
     }
 }
 
+/// Renames `from` to `to` (atomic within a file system).
+fn rename(from: &Path, to: &Path) -> Result<(), RunError> {
+    std::fs::rename(from, to).map_err(RunError::io(format!("rename {} to", from.display()), to))
+}
+
 /// The ideal-mechanism runs every case is compared with.
-pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>> {
+pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
     study
         .references
         .par_iter()
         .enumerate()
-        .map(|(k, r)| {
-            simulate(r, &study.solver, &study.sampling)
-                .with_context(|| format!("reference (ideal mechanism) {k} at {} rpm", r.rpm))
+        .map(|(index, r)| {
+            simulate(r, &study.solver, &study.sampling).map_err(|source| RunError::Reference {
+                index,
+                rpm: r.rpm,
+                source,
+            })
         })
         .collect()
 }
@@ -118,55 +127,33 @@ pub fn window_of(study: &Study) -> Window {
     }
 }
 
-/// Runs `study` (or a shard of it) into `opts.output`.
-pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
+/// How a run begins, decided from what is on disk and the options.
+enum Start {
+    /// No earlier run to take over: create the file from scratch.
+    Fresh,
+    /// Continue the interrupted run this journal recorded.
+    Resume(JournalReader),
+    /// The output already holds this study's (or shard's) complete result.
+    Complete(RunSummary),
+}
+
+/// Runs `study` (or a shard of it) into `opts.output`: takes the output's lock,
+/// decides how to start, creates the file (references first), replays an
+/// interrupted run, runs the pending cases on the workers and finishes the file.
+pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let start = Instant::now();
     let rows: Vec<usize> = match opts.shard {
         Some(s) => study.shard(s.k, s.n),
         None => (0..study.cases.len()).collect(),
     };
-    if rows.is_empty() {
-        bail!(
-            "shard {} of a {}-case study has no cases",
-            opts.shard.map_or(String::new(), |s| s.to_string()),
-            study.cases.len()
-        );
-    }
-    let (journal_path, _) = side_paths(&opts.output);
-    let new_journal_path = new_journal_path(&opts.output);
     if opts.output.is_dir() {
-        bail!(
+        return Err(RunError::Refused(format!(
             "{} is a directory; give the result file's path",
             opts.output.display()
-        );
+        )));
     }
-    // With `--force` the old result file is removed while the file is created (below).
-    if opts.force {
-        let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(&opts.output));
-        for p in [&journal_path, &new_journal_path]
-            .into_iter()
-            .chain(&partials)
-        {
-            remove_if_exists(p)?;
-        }
-    } else if opts.output.exists() {
-        bail!(
-            "{} exists; use --force to overwrite it",
-            opts.output.display()
-        );
-    } else if journal_path.exists() && !opts.resume {
-        bail!(
-            "{} holds an interrupted run; use --resume to continue it or --force to start over",
-            journal_path.display()
-        );
-    } else if opts.resume && !journal_path.exists() {
-        bail!(
-            "nothing to resume: {} does not exist",
-            journal_path.display()
-        );
-    }
-
-    let layout = study_layout(study, &rows)?;
+    let _lock = OutputLock::acquire(&opts.output)?;
+    let layout = study_layout(study, &rows, opts.shard);
     let header = JournalHeader {
         fingerprint: StudyFingerprint::of(study, opts.shard).0,
         n_time: layout.times.len() as u64,
@@ -176,30 +163,199 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
         n_metrics: layout.metrics.len() as u64,
         storage: layout.storage,
     };
-    let raw_per_case = 8 * (header.n_series * header.n_time + header.n_spectra * header.n_freq);
-    let mut stats = RunStats::default();
-    let reader = if opts.resume {
-        Some(JournalReader::open(&journal_path, &header)?)
-    } else {
-        None
+    let reader = match decide_start(study, opts, &header, rows.len(), start)? {
+        Start::Complete(summary) => return Ok(summary),
+        Start::Fresh => None,
+        Start::Resume(reader) => Some(reader),
     };
-    // A resumed run writes the other partial file than the one the journal's cases
-    // are in.
-    let data = reader
-        .as_ref()
-        .map_or(DataFile::Partial, |r| r.data_file().other());
+    let mut stats = RunStats::default();
+    let (mut writer, references, data) =
+        create_file(study, opts, &layout, reader.as_ref(), &mut stats)?;
+    let (journal_path, _) = side_paths(&opts.output);
+    let (mut journal, replayed) = match reader {
+        Some(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
+        None => (
+            JournalWriter::create(&journal_path, &header, data)
+                .map_err(RunError::io("create", &journal_path))?,
+            Replayed::default(),
+        ),
+    };
+    let resumed = replayed.done.len();
+    let mut pending: Vec<usize> = (0..rows.len())
+        .filter(|r| !replayed.done.contains(r))
+        .collect();
+    dispatch_order(study, &rows, &mut pending);
+    let mut tally = Tally {
+        ok: replayed.ok,
+        failed: replayed.failed,
+        stats,
+    };
+    let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
+    let work = Work {
+        study,
+        rows: &rows,
+        references: &references,
+        storage: layout.storage,
+        jobs: opts.jobs,
+        start,
+    };
+    tally.stats.startup = start.elapsed().as_secs_f64();
+    run_pending(&work, &pending, |rec| {
+        let cpu = thread_cpu();
+        let before = rec
+            .write_to(&mut writer)
+            .map_err(RunError::file(writer.path()))?;
+        let cpu_hdf5 = thread_cpu();
+        journal
+            .write(rec, before)
+            .map_err(RunError::io("append to", &journal_path))?;
+        tally.record(rec, cpu, cpu_hdf5, &layout);
+        progress.case_done(rec.status() != Status::Ok);
+        Ok(())
+    })
+    .map(|worker_stats| worker_stats.add_to(&mut tally.stats))?;
+    progress.finish();
     let partial_path = data.path(&opts.output);
-    // The ideal references run, and with `--force` the old result file is unlinked
-    // (milliseconds for a large file), while the file is created; both are done
-    // before the journal exists, so a kill cannot leave a journal beside an old result.
+    let cpu = thread_cpu();
+    writer.finish().map_err(RunError::file(&partial_path))?;
+    tally.stats.finish = thread_cpu() - cpu;
+    rename(&partial_path, &opts.output)?;
+    drop(journal);
+    std::fs::remove_file(&journal_path).map_err(RunError::io("remove", &journal_path))?;
+    Ok(RunSummary {
+        cases: rows.len(),
+        ok: tally.ok,
+        failed: tally.failed,
+        resumed,
+        rerun: replayed.journaled - resumed,
+        complete_before: false,
+        wall_time: start.elapsed().as_secs_f64(),
+        stats: tally.stats,
+    })
+}
+
+/// Decides how a run starts from the journal and result file on disk:
+///
+/// - a journal of an interrupted run: continue it with `--resume` (it must belong to
+///   this study and shard), discard it with `--force`, refuse otherwise;
+/// - no journal and a result file: with `--resume`, a complete result of this study
+///   and shard is left as it is ([`Start::Complete`]) and anything else refused;
+///   replaced with `--force`; refused otherwise;
+/// - neither: a fresh run (also with `--resume`, so a job script can always pass it).
+///
+/// Left-over partial files without a journal belong to no run and are removed.
+fn decide_start(
+    study: &Study,
+    opts: &RunOptions,
+    header: &JournalHeader,
+    n_rows: usize,
+    start: Instant,
+) -> Result<Start, RunError> {
+    let output = &opts.output;
+    let (journal_path, _) = side_paths(output);
+    let side_files = || {
+        let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(output));
+        [journal_path.clone(), new_journal_path(output)]
+            .into_iter()
+            .chain(partials)
+    };
+    if journal_path.exists() {
+        if opts.resume {
+            return Ok(Start::Resume(JournalReader::open(&journal_path, header)?));
+        }
+        if !opts.force {
+            return Err(RunError::Refused(format!(
+                "{} holds an interrupted run; use --resume to continue it or --force to start over",
+                journal_path.display()
+            )));
+        }
+    }
+    if output.exists() && !opts.force {
+        if !opts.resume {
+            return Err(RunError::Refused(format!(
+                "{} exists; use --force to overwrite it",
+                output.display()
+            )));
+        }
+        let summary = complete_result(study, opts, n_rows, start)?;
+        return Ok(Start::Complete(summary));
+    }
+    for p in side_files() {
+        remove_if_exists(&p)?;
+    }
+    Ok(Start::Fresh)
+}
+
+/// The summary of `opts.output` when it is a complete result of `study` run as
+/// `opts.shard`; refused when it is anything else.
+fn complete_result(
+    study: &Study,
+    opts: &RunOptions,
+    n_rows: usize,
+    start: Instant,
+) -> Result<RunSummary, RunError> {
+    let output = &opts.output;
+    let other = |why: &str| {
+        RunError::Refused(format!(
+            "{} is not a complete result of this study{}: {why}; \
+             use --force to replace it or choose another output",
+            output.display(),
+            opts.shard
+                .map_or(String::new(), |s| format!(" (shard {s})")),
+        ))
+    };
+    let reader = StudyReader::open(output).map_err(|e| other(&e.to_string()))?;
+    let text = |name: &str| {
+        reader
+            .attribute(name)
+            .and_then(|v| v.as_text().map(str::to_owned))
+    };
+    if text("study_fingerprint") != Some(StudyFingerprint::of(study, None).hex()) {
+        return Err(other("it was written for another grid or studyrun version"));
+    }
+    if text("shard").unwrap_or_default() != opts.shard.map_or(String::new(), |s| s.to_string()) {
+        return Err(other("it holds another shard"));
+    }
+    let statuses = reader.statuses().map_err(RunError::file(output))?;
+    if statuses.len() != n_rows || statuses.contains(&Status::Pending) {
+        return Err(other("it has pending cases"));
+    }
+    let failed = statuses.iter().filter(|&&s| s == Status::Failed).count();
+    Ok(RunSummary {
+        cases: n_rows,
+        ok: n_rows - failed,
+        failed,
+        resumed: 0,
+        rerun: 0,
+        complete_before: true,
+        wall_time: start.elapsed().as_secs_f64(),
+        stats: RunStats::default(),
+    })
+}
+
+/// Creates the partial file and writes the ideal references into it. The references
+/// run, and with `--force` the old result file is unlinked (milliseconds for a large
+/// file), while the file is created; both are done before the journal exists, so a
+/// kill cannot leave a journal beside an old result. Returns the writer, the
+/// references and which partial file it writes (a resumed run writes the other one
+/// than its journal's cases are in).
+fn create_file(
+    study: &Study,
+    opts: &RunOptions,
+    layout: &Layout,
+    reader: Option<&JournalReader>,
+    stats: &mut RunStats,
+) -> Result<(StudyWriter, Vec<CaseOutput>, DataFile), RunError> {
+    let data = reader.map_or(DataFile::Partial, |r| r.data_file().other());
+    let partial_path = data.path(&opts.output);
     let cpu = thread_cpu();
     let (references, writer, removed) = std::thread::scope(|scope| {
         let references = scope.spawn(|| run_references(study));
         let removed = opts
             .force
             .then(|| scope.spawn(|| remove_if_exists(&opts.output)));
-        let writer = StudyWriter::create(&partial_path, &layout)
-            .with_context(|| format!("cannot create {}", partial_path.display()));
+        let writer =
+            StudyWriter::create(&partial_path, layout).map_err(RunError::file(&partial_path));
         (joined(references), writer, removed.map_or(Ok(()), joined))
     });
     removed?;
@@ -209,44 +365,72 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             .iter()
             .map(|c| r.channel(c).expect("reference channel"))
             .collect();
-        writer.write_reference(k, &series)?;
+        writer
+            .write_reference(k, &series)
+            .map_err(RunError::file(&partial_path))?;
     }
     stats.create = thread_cpu() - cpu;
+    Ok((writer, references, data))
+}
 
-    // Replay what an interrupted run finished.
-    let (mut journal, replayed) = match reader {
-        Some(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
-        None => (
-            JournalWriter::create(&journal_path, &header, data)
-                .with_context(|| format!("cannot create {}", journal_path.display()))?,
-            Replayed::default(),
-        ),
-    };
-    let Replayed {
-        done,
-        journaled,
-        mut ok,
-        mut failed,
-    } = replayed;
-    let resumed = done.len();
-    let mut pending: Vec<usize> = (0..rows.len()).filter(|r| !done.contains(r)).collect();
-    dispatch_order(study, &rows, &mut pending);
+/// What the workers need to run cases.
+struct Work<'a> {
+    study: &'a Study,
+    /// The study's case index of every file row.
+    rows: &'a [usize],
+    /// The ideal references, by index.
+    references: &'a [CaseOutput],
+    storage: crate::output::Storage,
+    jobs: usize,
+    /// When the run started (for the workers' idle time at the end).
+    start: Instant,
+}
 
-    let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
+/// Counts what the writer stored.
+struct Tally {
+    ok: usize,
+    failed: usize,
+    stats: RunStats,
+}
+
+impl Tally {
+    /// Counts `rec`, written between the CPU times `cpu` (start) and `cpu_hdf5`
+    /// (HDF5 done; the journal's append followed).
+    fn record(&mut self, rec: &JournalRecord, cpu: f64, cpu_hdf5: f64, layout: &Layout) {
+        self.stats.hdf5 += cpu_hdf5 - cpu;
+        self.stats.journal += thread_cpu() - cpu_hdf5;
+        self.stats.stored_bytes += rec.chunk_bytes() as u64;
+        self.stats.sends += 1;
+        if rec.status() == Status::Ok {
+            self.ok += 1;
+            let values = layout.series.len() * layout.times.len()
+                + layout.spectra.len() * layout.frequencies.len();
+            self.stats.raw_bytes += 8 * values as u64;
+        } else {
+            self.failed += 1
+        }
+    }
+}
+
+/// Runs the `pending` rows on `work.jobs` workers, the costliest first, and hands
+/// each finished case's record to `store` on this thread (the one writer). Returns
+/// the workers' tally.
+fn run_pending(
+    work: &Work<'_>,
+    pending: &[usize],
+    mut store: impl FnMut(&JournalRecord) -> Result<(), RunError>,
+) -> Result<WorkerTally, RunError> {
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.jobs.max(1))
+        .num_threads(work.jobs.max(1))
         .build()?;
-    let n_window = study.analysis_window().len();
-    let window = window_of(study);
-    let storage = layout.storage;
+    let n_window = work.study.analysis_window().len();
+    let window = window_of(work.study);
     // At most two records per worker wait for the writer: memory stays bounded.
-    let (tx, rx) = sync_channel::<Box<JournalRecord>>(2 * opts.jobs.max(1));
+    let (tx, rx) = sync_channel::<Box<JournalRecord>>(2 * work.jobs.max(1));
     let tally = WorkerTally::default();
-    let n_pending = pending.len();
-    let (rows_ref, refs, tally_ref) = (&rows, &references, &tally);
-    stats.startup = start.elapsed().as_secs_f64();
-    let received = std::thread::scope(|scope| -> Result<usize> {
+    let received = std::thread::scope(|scope| -> Result<usize, RunError> {
         // The workers own the sender: when they end, normally or not, the channel closes.
+        let tally = &tally;
         scope.spawn(move || {
             // Every worker takes the next case of `pending` until none is left or the
             // writer is gone.
@@ -254,79 +438,41 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary> {
             pool.broadcast(|_| {
                 let mut plan = SpectrumPlan::new(n_window, window)
                     .expect("window length checked by the layout");
-                let mut encoder = ChunkEncoder::new(storage);
+                let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let case = &study.cases[rows_ref[row]];
-                    let result =
-                        run_case(study, row, &case.params, &refs[case.reference], &mut plan);
+                    let case = &work.study.cases[work.rows[row]];
+                    let reference = &work.references[case.reference];
+                    let result = run_case(work.study, row, &case.params, reference, &mut plan);
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));
-                    tally_ref.case(
+                    tally.case(
                         result.cost.simulate,
                         result.cost.analysis,
                         thread_cpu() - cpu,
                     );
-                    if send(&tx, record, tally_ref).is_err() {
+                    if send(&tx, record, tally).is_err() {
                         break;
                     }
                 }
-                tally_ref.out_of_cases(start.elapsed());
+                tally.out_of_cases(work.start.elapsed());
             });
         });
         let mut received = 0;
         // `rx` is consumed: if this loop stops early (an error), the channel closes and
         // the workers stop instead of waiting for a writer that is gone.
         for rec in rx {
-            let cpu = thread_cpu();
-            let before = rec.write_to(&mut writer)?;
-            let cpu_hdf5 = thread_cpu();
-            journal
-                .write(&rec, before)
-                .with_context(|| format!("cannot append to {}", journal_path.display()))?;
-            stats.hdf5 += cpu_hdf5 - cpu;
-            stats.journal += thread_cpu() - cpu_hdf5;
-            stats.stored_bytes += rec.chunk_bytes() as u64;
-            if rec.status() == Status::Ok {
-                ok += 1;
-                stats.raw_bytes += raw_per_case;
-            } else {
-                failed += 1
-            }
-            progress.case_done(rec.status() != Status::Ok);
+            store(&rec)?;
             received += 1;
         }
         Ok(received)
     })?;
-    if received != n_pending {
-        bail!("a worker thread stopped after {received} of {n_pending} cases; rerun with --resume");
+    if received != pending.len() {
+        return Err(RunError::WorkerStopped {
+            received,
+            pending: pending.len(),
+        });
     }
-    progress.finish();
-    let cpu = thread_cpu();
-    writer
-        .finish()
-        .with_context(|| format!("cannot finish {}", partial_path.display()))?;
-    stats.finish = thread_cpu() - cpu;
-    stats.sends = received as u64;
-    tally.add_to(&mut stats);
-    std::fs::rename(&partial_path, &opts.output).with_context(|| {
-        format!(
-            "cannot rename {} to {}",
-            partial_path.display(),
-            opts.output.display()
-        )
-    })?;
-    drop(journal);
-    std::fs::remove_file(&journal_path)
-        .with_context(|| format!("cannot remove {}", journal_path.display()))?;
-    Ok(RunSummary {
-        cases: rows.len(),
-        ok,
-        failed,
-        resumed,
-        rerun: journaled - resumed,
-        wall_time: start.elapsed().as_secs_f64(),
-        stats,
-    })
+    Ok(tally)
 }
 
 /// What a resumed run took over from the journal of the interrupted one.
@@ -353,19 +499,19 @@ fn replay(
     header: &JournalHeader,
     writer: &mut StudyWriter,
     n_rows: usize,
-) -> Result<(JournalWriter, Replayed)> {
+) -> Result<(JournalWriter, Replayed), RunError> {
     let (journal_path, _) = side_paths(output);
     let new_journal_path = new_journal_path(output);
     let old = reader.data_file().path(output);
-    let old_data = std::fs::File::open(&old).with_context(|| {
-        format!(
-            "cannot open {}, the partial file that holds the journal's cases; \
+    let old_data = std::fs::File::open(&old).map_err(|e| {
+        RunError::Refused(format!(
+            "cannot open {}, the partial file that holds the journal's cases ({e}); \
              run with --force to start over",
             old.display()
-        )
+        ))
     })?;
     let mut journal = JournalWriter::create(&new_journal_path, header, reader.data_file().other())
-        .with_context(|| format!("cannot create {}", new_journal_path.display()))?;
+        .map_err(RunError::io("create", &new_journal_path))?;
     let mut journaled = HashSet::new();
     let mut replayed = Replayed::default();
     while let Some(entry) = reader.next_entry() {
@@ -377,10 +523,12 @@ fn replay(
         let Some(rec) = entry.load(&old_data) else {
             continue;
         };
-        let before = rec.write_to(writer)?;
+        let before = rec
+            .write_to(writer)
+            .map_err(RunError::file(writer.path()))?;
         journal
             .write(&rec, before)
-            .with_context(|| format!("cannot append to {}", new_journal_path.display()))?;
+            .map_err(RunError::io("append to", &new_journal_path))?;
         replayed.done.insert(rec.row());
         if rec.status() == Status::Ok {
             replayed.ok += 1
@@ -389,15 +537,9 @@ fn replay(
         }
     }
     replayed.journaled = journaled.len();
-    std::fs::rename(&new_journal_path, &journal_path).with_context(|| {
-        format!(
-            "cannot rename {} to {}",
-            new_journal_path.display(),
-            journal_path.display()
-        )
-    })?;
+    rename(&new_journal_path, &journal_path)?;
     drop(old_data);
-    std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
+    std::fs::remove_file(&old).map_err(RunError::io("remove", &old))?;
     Ok((journal, replayed))
 }
 

@@ -1,4 +1,4 @@
-//! Vibration metrics (MODEL.md §6): how far a bearing case departs from the ideal
+//! Vibration metrics (docs/model.md §6): how far a bearing case departs from the ideal
 //! mechanism at the same speed and sample times, over an analysed window of samples
 //! after the initial transient ([`crate::simulate::Sampling::analysis_window`]).
 
@@ -67,7 +67,7 @@ pub struct VibrationMetrics {
 }
 
 /// The default start of the analysed window: one crank revolution, `60 / rpm` s,
-/// which skips the initial fall through the clearance (MODEL.md §8).
+/// which skips the initial fall through the clearance (docs/model.md §9.3).
 pub fn default_window_start(rpm: f64) -> f64 {
     60.0 / rpm
 }

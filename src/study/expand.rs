@@ -543,7 +543,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
     Ok(e)
 }
 
-/// MODEL.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` and `location:`.
+/// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` and `location:`.
 fn base_case(
     ctx: &Ctx<'_>,
     file: &GridFile,
@@ -552,7 +552,7 @@ fn base_case(
 ) -> Result<CaseParams, StudyError> {
     let mut c = CaseParams::default();
     if effects.waviness {
-        // MODEL.md Table 2: N_i = N_o = 35, Π_p = 4 µm.
+        // the paper's Table 2 (docs/model.md §2.8): N_i = N_o = 35, Π_p = 4 µm.
         c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
         c.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
     }

@@ -1,6 +1,6 @@
 //! Studies: a grid file parsed, validated and expanded into cases before anything runs.
 //!
-//! Two stages (MODEL.md defaults fill everything a file leaves out):
+//! Two stages (docs/model.md defaults fill everything a file leaves out):
 //! 1. [`config`]: the serde mirror of the YAML (unknown keys refused), every value
 //!    with its line and column;
 //! 2. [`Study::from_yaml`]: units resolved ([`units`]), effects applied, axes

@@ -1,7 +1,7 @@
 //! Helpers shared by `tests/hard_cases.rs` and `tests/properties.rs` (each includes
 //! this file with `#[path = "common/hard.rs"] mod hard;`): one instrumented run of a
 //! slider-crank case with the energy ledger on, and the checks every hard case makes
-//! (finite outputs, eccentricity within physical bounds, MODEL.md §8's energy
+//! (finite outputs, eccentricity within physical bounds, docs/model.md §4.4's energy
 //! balance, constraint residuals).
 #![allow(dead_code)]
 
@@ -46,7 +46,7 @@ impl OdeSystem for Probe {
 pub struct Record {
     /// Time (s).
     pub t: f64,
-    /// The outputs of MODEL.md §3.
+    /// The outputs of docs/model.md §5.2.
     pub sample: Sample,
     /// Kinetic energy (J).
     pub kinetic: f64,
