@@ -6,6 +6,10 @@ per-case parameters and metrics are `[case]`, series `[case, time]`, spectra
 `reference_index[case]` saying which reference each case is compared with.
 Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
 
+open_study opens one file; open_shards opens the shard files of one study
+(`studyrun ... --shard K/N`) as one Dataset ordered by case id, as `studyrun merge`
+would combine them.
+
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
 
