@@ -19,9 +19,8 @@ mod progress;
 mod stats;
 
 pub use case::{run_case, CaseCost, CaseResult};
-pub use journal::{
-    JournalEntry, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
-};
+pub use journal::JournalError;
+use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
 pub use stats::RunStats;
 
 use std::collections::HashSet;
@@ -42,12 +41,13 @@ use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
 use crate::study::Study;
 
-/// How to run.
+/// How to run. The default writes `study.h5` in the working directory with one
+/// worker per core, refusing to replace anything, with progress on stderr.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// The result file.
     pub output: PathBuf,
-    /// Worker threads (≥ 1).
+    /// Worker threads (≥ 1; 0 counts as 1).
     pub jobs: usize,
     /// Continue an interrupted run from its journal.
     pub resume: bool,
@@ -57,6 +57,19 @@ pub struct RunOptions {
     pub shard: Option<Shard>,
     /// No progress output.
     pub quiet: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            output: PathBuf::from("study.h5"),
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            resume: false,
+            force: false,
+            shard: None,
+            quiet: false,
+        }
+    }
 }
 
 /// What a run did.

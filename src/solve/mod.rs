@@ -118,14 +118,15 @@ pub enum Method {
 impl Method {
     /// The default integrator: DOP853 at [`DEFAULT_RTOL`] and [`DEFAULT_ATOL`], the
     /// cheapest setting whose worst metric error on the paper study stays under
-    /// 0.1 % (README, "What accuracy costs").
+    /// 0.1 % (docs/accuracy.md).
     pub const DEFAULT: Method = Method::Dop853 {
         rtol: DEFAULT_RTOL,
         atol: DEFAULT_ATOL,
     };
 }
 
-/// Integrator settings shared by all methods.
+/// Integrator settings shared by all methods; the default is what a study uses
+/// when its grid file names no solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     /// The method and its accuracy setting.
@@ -150,6 +151,13 @@ impl SolverSettings {
             max_step: f64::INFINITY,
             locate_events: true,
         }
+    }
+}
+
+impl Default for SolverSettings {
+    /// [`Method::DEFAULT`] with [`SolverSettings::new`]'s budget and event location.
+    fn default() -> Self {
+        Self::new(Method::DEFAULT)
     }
 }
 
