@@ -314,6 +314,10 @@ fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
     let raw = rows.len() as f64
         * (CHANNELS.len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)
         * width;
+    if rows.is_empty() {
+        println!("\nno cases in this shard: the run writes a file with the references only");
+        return Ok(());
+    }
     // Calibrate on 10 % of the first case's duration.
     let probe = &study.cases[rows[0]].params;
     let short = Sampling {
