@@ -52,7 +52,7 @@
 //! ## The data's path through the crate
 //!
 //! 1. [`study`] reads a grid file, resolves units and expands it into cases.
-//! 2. [`simulate`] runs one case: the [`mechanism`] ([`SliderCrank`], minimal
+//! 2. [`simulate()`] runs one case: the [`mechanism`] ([`SliderCrank`], minimal
 //!    coordinates, with the [`bearing`] at the chosen joint) integrated by [`solve`]
 //!    (adaptive explicit pairs that locate contact switches, RK4, SDIRK4), sampled
 //!    at exact sample times. [`CartesianSliderCrank`] on the general planar

@@ -17,7 +17,7 @@ pub struct CaseResult {
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`CHANNELS`] entry (empty when failed).
+    /// One series per [`crate::simulate::CHANNELS`] entry (empty when failed).
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,

@@ -2,9 +2,9 @@
 //! thread-safe), bounded memory, a crash journal, resume, shards and merging.
 //!
 //! Data flow: workers (a rayon pool) take cases one at a time, the costliest first
-//! ([`order`]), simulate them, compute spectra and metrics, encode the series
+//! (`order`), simulate them, compute spectra and metrics, encode the series
 //! and spectra into the chunks the file stores (float32 conversion, shuffle, deflate)
-//! with their checksums ([`JournalRecord::encode`]), and send the records through a
+//! with their checksums (`JournalRecord::encode`), and send the records through a
 //! bounded channel; the calling thread copies each case's chunks into `OUT.h5.partial`
 //! (HDF5 direct chunk write), appends to the journal where they went, and reports
 //! progress. At the end the partial file is renamed to `OUT.h5` (atomic) and the

@@ -1,4 +1,4 @@
-//! A case's signal processing, between [`crate::simulate`] and [`crate::output`]:
+//! A case's signal processing, between [`mod@crate::simulate`] and [`crate::output`]:
 //! the spectra and the vibration metrics of docs/model.md §6–§7 computed from a
 //! case's sampled outputs and the ideal mechanism's.
 
