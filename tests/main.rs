@@ -8,6 +8,7 @@ mod cage_angle;
 mod cli;
 mod constraints;
 mod convergence;
+mod docs;
 mod energy;
 mod events;
 mod grid;
