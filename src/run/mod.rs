@@ -18,7 +18,7 @@ mod order;
 mod progress;
 mod stats;
 
-pub use case::{run_case, CaseCost, CaseResult};
+use case::run_case;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
 pub use stats::RunStats;
@@ -116,7 +116,7 @@ fn rename(from: &Path, to: &Path) -> Result<(), RunError> {
 }
 
 /// The ideal-mechanism runs every case is compared with.
-pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
+pub(crate) fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
     study
         .references
         .par_iter()
@@ -132,7 +132,7 @@ pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
 }
 
 /// The spectrum window of a study.
-pub fn window_of(study: &Study) -> Window {
+pub(crate) fn window_of(study: &Study) -> Window {
     if study.window == "rectangular" {
         Window::Rectangular
     } else {
