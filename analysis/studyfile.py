@@ -94,8 +94,8 @@ def open_shards(paths, lazy=None):
     over `case` are concatenated and sorted by case id; the others (the `reference`
     runs, `time`, `frequency`) must be the same in every shard and are kept once. Root
     attributes that every shard has alike are kept, `history` holds the shards' lines,
-    and `file_cases` becomes the number of cases opened (`created` and other differing
-    attributes are dropped).
+    `file_cases` becomes the number of cases opened and `shard` is empty, as in a
+    merged file (`created` and other differing attributes are dropped).
 
     `lazy`: read the data on demand through dask (`xr.open_mfdataset`); the default is
     to do so when dask is installed, else every shard is read into memory. Close the
@@ -147,6 +147,8 @@ def open_shards(paths, lazy=None):
         raise ValueError(f"case ids in more than one file: {ids[counts > 1].tolist()}")
     out = ds.sortby("case")
     out.attrs["file_cases"] = np.int64(out.sizes["case"])
+    # The shards' files together are no one shard: like a merged file, say none.
+    out.attrs["shard"] = ""
     out.set_close(ds.close)
     return out
 
