@@ -9,4 +9,4 @@ mod slider_crank;
 
 pub use cartesian::CartesianSliderCrank;
 pub use params::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
-pub use slider_crank::SliderCrank;
+pub use slider_crank::{Energy, SliderCrank};
