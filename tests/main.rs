@@ -20,4 +20,5 @@ mod integrators;
 mod isa;
 mod parity;
 mod properties;
+mod stiffness;
 mod validation;

@@ -11,4 +11,4 @@ mod slider_crank;
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
 pub use params::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
-pub use slider_crank::SliderCrank;
+pub use slider_crank::{Energy, SliderCrank};
