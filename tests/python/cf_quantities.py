@@ -49,7 +49,7 @@ _BY_QUANTITY = {
     "damping": ["damping"],
     "mass": ["crank_mass", "rod_mass", "slider_mass"],
     "inertia": ["crank_inertia", "rod_inertia", "slider_inertia"],
-    "time": ["time", "wall_time"],
+    "time": ["time", "wall_time", "stiffness_switch_time"],
     "frequency": ["frequency"],
     "acceleration": ["slider_acceleration"],
     "moment": ["crank_moment"],
