@@ -66,8 +66,8 @@ def _same(a, b):
 
 def _combine_shard_attrs(attrs_list, context=None):
     """Attributes of the shards combined: kept where every shard has the same value,
-    `history` the shards' distinct lines in order, the rest (`created`, `file_cases`,
-    ...) dropped. Raises ValueError if `study_fingerprint` differs (other studies)."""
+    `history` the shards' distinct lines in order, `shard` empty where the shards
+    differ (as in a merged file), the rest (`created`, `file_cases`, ...) dropped. Raises ValueError if `study_fingerprint` differs (other studies)."""
     fingerprints = {str(a["study_fingerprint"]) for a in attrs_list if "study_fingerprint" in a}
     if len(fingerprints) > 1:
         raise ValueError(
@@ -82,6 +82,8 @@ def _combine_shard_attrs(attrs_list, context=None):
             out[key] = "\n".join(dict.fromkeys(lines))
         elif len(values) == len(attrs_list) and all(_same(values[0], v) for v in values[1:]):
             out[key] = values[0]
+        elif key == "shard":
+            out[key] = ""  # several shards together: no one shard (as `studyrun merge` writes)
     return out
 
 
