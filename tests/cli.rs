@@ -2,13 +2,13 @@
 //! kill, shards and merge, thread-count independence.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::time::{Duration, Instant};
 
 use studyrun::output::StudyReader;
 
 fn studyrun(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
         .output()
@@ -175,7 +175,7 @@ fn same_data_on_every_instruction_set() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "small.yaml", SMALL);
     let run = |isa: &str, out: &str| {
-        Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
             .current_dir(dir.path())
             .env("STUDYRUN_ISA", isa)
             .args(["small.yaml", "-o", out, "-q"])
@@ -244,7 +244,7 @@ fn shards_merge_into_the_single_run() {
 /// Starts `studyrun` in `dir` with `args` and kills it (-9) once `journal` holds more
 /// than `bytes` bytes.
 fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    let mut child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
         .spawn()
@@ -437,7 +437,7 @@ fn a_directory_as_the_result_file_is_refused_at_once() {
 const RACE: &str = "name: race\nduration: 0.02\nsample_rate: 10000\ntransient: \"0.005 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 11]\n  rpm: [600]\n";
 
 fn spawn(dir: &Path, args: &[&str]) -> std::process::Child {
-    Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
         .stdout(std::process::Stdio::null())

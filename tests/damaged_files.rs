@@ -8,9 +8,10 @@
 //! libhdf5 (`H5HG_read` from a variable-length string attribute; `H5A__close` from
 //! `H5Aiterate`), and a zeroed global heap block made them loop forever.
 
+use crate::common::studyrun_ok;
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 /// 4 cases of 10 ms: a file of about 130 kB, mostly metadata.
@@ -71,7 +72,7 @@ fn damage(bytes: &[u8], rng: &mut Rng) -> (Vec<u8>, String) {
 /// Runs `studyrun args` in `dir` and returns its exit code; fails the test if it died
 /// by a signal, panicked, hung, or failed without a message.
 fn run_clean(dir: &Path, args: &[&str], what: &str) -> i32 {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    let mut child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
         .env("STUDYRUN_CHECK_TIMEOUT", "20")
@@ -109,19 +110,6 @@ fn run_clean(dir: &Path, args: &[&str], what: &str) -> i32 {
         );
     }
     code.unwrap()
-}
-
-fn studyrun_ok(dir: &Path, args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_studyrun"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// The corpus runs on this many threads (the machine has 2 cores).
@@ -202,7 +190,7 @@ fn killed_run(dir: &Path) -> (Vec<u8>, Vec<u8>) {
         for side in ["many.h5", "many.h5.journal", "many.h5.partial"] {
             let _ = std::fs::remove_file(dir.join(side));
         }
-        let mut child = Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        let mut child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
             .current_dir(dir)
             .args(["many.yaml", "-q", "-j", "1"])
             .stderr(Stdio::null())

@@ -9,8 +9,8 @@
 
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
+use crate::common::studyrun_ok;
 use hdf5::types::{TypeDescriptor, VarLenUnicode};
 use hdf5_sys::h5a::{
     H5Aclose, H5Acreate2, H5Adelete, H5Aexists, H5Aget_space, H5Aget_type, H5Aopen, H5Aread,
@@ -31,31 +31,17 @@ use studyrun::output::{inspect, AttrValue, CaseRecord, Layout, StudyReader, Stud
 /// 4 cases of 10 ms: a file of a few hundred kB, made in a fraction of a second.
 const TINY: &str = "name: tiny\nduration: 0.01\nsample_rate: 2000\ntransient: \"0.002 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9]\n  rpm: [600]\n";
 
-fn studyrun(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_studyrun"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "studyrun {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
 /// The tiny study in `dir`: `tiny.h5` (the whole run), `s1.h5`, `s2.h5` (its two
 /// shards) and `merged.h5` (their merge).
 fn tiny_files(dir: &Path) {
     std::fs::write(dir.join("tiny.yaml"), TINY).unwrap();
-    studyrun(dir, &["tiny.yaml", "-q"]);
+    studyrun_ok(dir, &["tiny.yaml", "-q"]);
     for k in 1..=2 {
         let shard = format!("{k}/2");
         let out = format!("s{k}.h5");
-        studyrun(dir, &["tiny.yaml", "--shard", &shard, "-o", &out, "-q"]);
+        studyrun_ok(dir, &["tiny.yaml", "--shard", &shard, "-o", &out, "-q"]);
     }
-    studyrun(dir, &["merge", "merged.h5", "s1.h5", "s2.h5"]);
+    studyrun_ok(dir, &["merge", "merged.h5", "s1.h5", "s2.h5"]);
 }
 
 /// Runs `f` under hdf5-metno's library lock (libhdf5 is not thread-safe).
@@ -376,7 +362,7 @@ fn files_the_tools_rewrote_are_read_inspected_and_merged() {
             let mut args = vec!["merge".to_owned(), merged.display().to_string()];
             args.extend(shards.iter().map(|p| p.display().to_string()));
             let args: Vec<&str> = args.iter().map(String::as_str).collect();
-            studyrun(d, &args);
+            studyrun_ok(d, &args);
             assert_same_study(&merged, &d.join("merged.h5"));
         }
     }
@@ -412,11 +398,11 @@ fn merge_matches_variables_by_name() {
     reversed_copy(&d.join("s2.h5"), &d.join("r2.h5"));
     for (a, b) in [("s1.h5", "r2.h5"), ("r1.h5", "s2.h5"), ("r2.h5", "r1.h5")] {
         let out = format!("m_{a}_{b}");
-        studyrun(d, &["merge", &out, a, b]);
+        studyrun_ok(d, &["merge", &out, a, b]);
         assert_same_study(&d.join(&out), &d.join("merged.h5"));
     }
     // The refusals stay: a shard twice, a pending case.
-    let twice = Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    let twice = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(d)
         .args(["merge", "m.h5", "r1.h5", "r1.h5"])
         .output()

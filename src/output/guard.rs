@@ -72,6 +72,18 @@ pub(super) fn check<E>(timeout: Duration, reads: impl FnOnce() -> Result<(), E>)
         // and flushes no stdio or HDF5 buffers.
         let pid = unsafe { libc::fork() };
         if pid == 0 {
+            // The inherited descriptors share this process's open files and the HDF5
+            // file locks (flock) on them: closed at once, so that a file this process
+            // closes meanwhile is not kept locked by the child. The reads open their
+            // file anew. (`close_range`, else a loop: both async-signal-safe.)
+            // SAFETY: closing descriptors in the child only.
+            unsafe {
+                if libc::syscall(libc::SYS_close_range, 3u32, u32::MAX, 0u32) != 0 {
+                    for fd in 3..4096 {
+                        libc::close(fd);
+                    }
+                }
+            }
             let code = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(reads)) {
                 Ok(Ok(())) => 0,
                 Ok(Err(_)) => 1,

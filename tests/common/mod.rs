@@ -3,6 +3,48 @@
 
 pub mod hard;
 
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// A command for `program` that starts with no descriptor of this process but the
+/// standard three. The tests run in one process: libhdf5 opens files without
+/// close-on-exec, and a child started while another test holds an HDF5 file open
+/// would keep that file's lock (flock) for its whole life.
+pub fn command(program: impl AsRef<std::ffi::OsStr>) -> Command {
+    use std::os::unix::process::CommandExt;
+    let mut cmd = Command::new(program);
+    // SAFETY: only async-signal-safe calls between fork and exec. CLOSE_RANGE_CLOEXEC
+    // marks the descriptors, so those std itself uses to report an exec failure stay
+    // open until the exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::syscall(
+                libc::SYS_close_range,
+                3u32,
+                u32::MAX,
+                libc::CLOSE_RANGE_CLOEXEC,
+            );
+            Ok(())
+        });
+    }
+    cmd
+}
+
+/// Runs the `studyrun` binary in `dir` with `args` and asserts that it succeeds.
+pub fn studyrun_ok(dir: &Path, args: &[&str]) -> Output {
+    let out = command(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "studyrun {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Closed-form kinematics of the ideal slider-crank at crank angle `th` (rad) and
 /// constant speed `w` (rad/s): positions, velocities and accelerations of the
 /// crank, rod and slider centres of mass, and the rod's angle, rate and
