@@ -19,4 +19,5 @@ mod integrators;
 mod isa;
 mod parity;
 mod properties;
+mod refusals;
 mod validation;
