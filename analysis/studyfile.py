@@ -6,6 +6,10 @@ per-case parameters and metrics are `[case]`, series `[case, time]`, spectra
 `reference_index[case]` saying which reference each case is compared with.
 Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
 
+open_study opens one file; open_shards opens the shard files of one study
+(`studyrun ... --shard K/N`) as one Dataset ordered by case id, as `studyrun merge`
+would combine them.
+
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
 
@@ -62,8 +66,8 @@ def _same(a, b):
 
 def _combine_shard_attrs(attrs_list, context=None):
     """Attributes of the shards combined: kept where every shard has the same value,
-    `history` the shards' distinct lines in order, the rest (`created`, `file_cases`,
-    ...) dropped. Raises ValueError if `study_fingerprint` differs (other studies)."""
+    `history` the shards' distinct lines in order, `shard` empty where the shards
+    differ (as in a merged file), the rest (`created`, `file_cases`, ...) dropped. Raises ValueError if `study_fingerprint` differs (other studies)."""
     fingerprints = {str(a["study_fingerprint"]) for a in attrs_list if "study_fingerprint" in a}
     if len(fingerprints) > 1:
         raise ValueError(
@@ -78,6 +82,8 @@ def _combine_shard_attrs(attrs_list, context=None):
             out[key] = "\n".join(dict.fromkeys(lines))
         elif len(values) == len(attrs_list) and all(_same(values[0], v) for v in values[1:]):
             out[key] = values[0]
+        elif key == "shard":
+            out[key] = ""  # several shards together: no one shard (as `studyrun merge` writes)
     return out
 
 
@@ -90,8 +96,8 @@ def open_shards(paths, lazy=None):
     over `case` are concatenated and sorted by case id; the others (the `reference`
     runs, `time`, `frequency`) must be the same in every shard and are kept once. Root
     attributes that every shard has alike are kept, `history` holds the shards' lines,
-    and `file_cases` becomes the number of cases opened (`created` and other differing
-    attributes are dropped).
+    `file_cases` becomes the number of cases opened and `shard` is empty, as in a
+    merged file (`created` and other differing attributes are dropped).
 
     `lazy`: read the data on demand through dask (`xr.open_mfdataset`); the default is
     to do so when dask is installed, else every shard is read into memory. Close the
@@ -143,6 +149,8 @@ def open_shards(paths, lazy=None):
         raise ValueError(f"case ids in more than one file: {ids[counts > 1].tolist()}")
     out = ds.sortby("case")
     out.attrs["file_cases"] = np.int64(out.sizes["case"])
+    # The shards' files together are no one shard: like a merged file, say none.
+    out.attrs["shard"] = ""
     out.set_close(ds.close)
     return out
 

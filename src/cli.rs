@@ -68,17 +68,18 @@ fn write_stdout(args: fmt::Arguments<'_>) -> Result<()> {
 
 const EXAMPLES: &str = "\
 Examples:
-  studyrun studies/paper.yaml                      run the paper's study into paper.h5
-  studyrun studies/paper.yaml -o out.h5 -j 2       two worker threads, chosen output
-  studyrun studies/showcase.yaml --dry-run         list the cases, estimate size and time
-  studyrun studies/showcase.yaml --resume          continue a run that was killed
-  studyrun run grid.yaml --shard 3/8 -o part3.h5   one of 8 shards (e.g. a Slurm array task)
-  studyrun merge all.h5 part*.h5                   combine the shards
-  studyrun inspect out.h5                          summary, status counts, failed cases
-  studyrun validate grid.yaml                      check a grid file without running it
-  studyrun accuracy studies/accuracy.yaml          error and cost of every integrator setting
-  studyrun accuracy grid.yaml --methods tsit5      only one integrator's settings
-  studyrun accuracy grid.yaml --rtols 1e-7,5e-8    the adaptive methods at these rtols
+  studyrun studies/paper.yaml                        run the paper's study into paper.h5
+  studyrun studies/paper.yaml -o out.h5 -j 2         two worker threads, chosen output
+  studyrun studies/showcase.yaml --dry-run           list the cases, estimate size and time
+  studyrun studies/showcase.yaml --resume            start, continue a killed run, or confirm it is done
+  studyrun studies/showcase.yaml --shard 3/8 -o part3.h5 --resume
+                                                     one of 8 shards (e.g. a Slurm array task)
+  studyrun merge showcase.h5 part*.h5                combine the shards
+  studyrun inspect paper.h5                          summary, status counts, failed cases
+  studyrun validate studies/showcase.yaml            check a grid file without running it
+  studyrun accuracy studies/accuracy_smoke.yaml      error and cost of every integrator setting
+  studyrun accuracy studies/paper.yaml --methods tsit5   only one integrator's settings
+  studyrun accuracy studies/paper.yaml --rtols 1e-7,5e-8 the adaptive methods at these rtols
 
 Exit codes: 0 all cases ok (or some failed, with --allow-failed); 1 error (I/O, HDF5,
 output in use by another process); 2 invalid input; 3 finished, some cases failed.
@@ -213,12 +214,10 @@ pub fn main() -> ExitCode {
             jobs,
             memory_limit,
         }) => validate_command(&grid, jobs, memory_limit),
-        Some(Command::Inspect { file }) => output::inspect(&file)
-            .map_err(anyhow::Error::from)
-            .and_then(|text| {
-                out!("{}", text.trim_end_matches('\n'))?;
-                Ok(EXIT_OK)
-            }),
+        Some(Command::Inspect { file }) => output::inspect(&file).and_then(|text| {
+            out!("{}", text.trim_end_matches('\n'))?;
+            Ok(EXIT_OK)
+        }),
         Some(Command::Accuracy {
             grid,
             output,
@@ -466,6 +465,10 @@ fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
         limits.describe(),
         estimate
     )?;
+    if rows.is_empty() {
+        out!("no cases in this shard: the run writes a file with the references only")?;
+        return Ok(());
+    }
     // Calibrate on 10 % of the duration of a few cases spread over the table.
     let short = Sampling {
         duration: 0.1 * study.sampling.duration,

@@ -70,7 +70,7 @@ pub enum RunError {
         /// The study file.
         path: std::path::PathBuf,
         /// What went wrong.
-        source: crate::output::StudyFileError,
+        source: Box<crate::output::StudyFileError>,
     },
     /// The crash journal of an interrupted run cannot be used.
     #[error(transparent)]
@@ -132,6 +132,9 @@ impl RunError {
         path: &std::path::Path,
     ) -> impl FnOnce(crate::output::StudyFileError) -> Self {
         let path = path.to_path_buf();
-        move |source| Self::File { path, source }
+        move |source| Self::File {
+            path,
+            source: Box::new(source),
+        }
     }
 }

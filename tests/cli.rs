@@ -431,3 +431,306 @@ fn a_directory_as_the_result_file_is_refused_at_once() {
         }
     }
 }
+
+/// A 12-case study of 20 ms per case: short enough for many trials, long enough
+/// (about 0.1–0.3 s a run) for two processes to overlap.
+const RACE: &str = "name: race\nduration: 0.02\nsample_rate: 10000\ntransient: \"0.005 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 11]\n  rpm: [600]\n";
+
+fn spawn(dir: &Path, args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(dir)
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Exit code and stderr of a finished child.
+fn finish(child: std::process::Child) -> (i32, String) {
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().expect("exited, not killed by a signal"),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// After a trial: the output is the uninterrupted run's data, or there is no output
+/// and nobody claimed success; exits are 0 or 1, and a refusal (1) names the reason.
+fn check_trial(dir: &Path, straight: &Path, outcomes: &[(i32, String)], trial: &str) {
+    let out = dir.join("race.h5");
+    for (code, stderr) in outcomes {
+        assert!(*code == 0 || *code == 1, "{trial}: exit {code}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{trial}: {stderr}");
+        if *code == 1 {
+            assert!(
+                stderr.contains("in use by another studyrun")
+                    || stderr.contains("exists; use --force")
+                    || stderr.contains("holds an interrupted run"),
+                "{trial}: {stderr}"
+            );
+        }
+    }
+    if out.exists() {
+        assert_same_data(&out, straight);
+    } else {
+        assert!(
+            outcomes.iter().all(|(c, _)| *c != 0),
+            "{trial}: a success exit without a result file"
+        );
+    }
+}
+
+/// Removes every file of the output `race.h5` (a fresh trial).
+fn clear_race(dir: &Path) {
+    for side in [
+        "",
+        ".journal",
+        ".journal.new",
+        ".partial",
+        ".partial.resumed",
+        ".lock",
+    ] {
+        let _ = std::fs::remove_file(dir.join(format!("race.h5{side}")));
+    }
+}
+
+/// Two runs on one output started together, two `--resume` of one killed run, and a
+/// `--force` beside a running job, 50 trials each: every trial ends with the
+/// uninterrupted run's data or no file, never with a success exit beside a wrong file.
+#[test]
+fn one_writer_per_output_under_races() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "race.yaml", RACE);
+    assert!(
+        studyrun(d, &["race.yaml", "-o", "straight.h5", "-q", "-j", "1"])
+            .status
+            .success()
+    );
+    let straight = d.join("straight.h5");
+    let run = ["race.yaml", "-o", "race.h5", "-q", "-j", "1"];
+    let resume = ["race.yaml", "-o", "race.h5", "-q", "-j", "1", "--resume"];
+    let force = ["race.yaml", "-o", "race.h5", "-q", "-j", "1", "--force"];
+    let (mut locked, mut both_ok) = (0, 0);
+    for trial in 0..50 {
+        clear_race(d);
+        let (a, b) = (spawn(d, &run), spawn(d, &run));
+        let outcomes = [finish(a), finish(b)];
+        check_trial(d, &straight, &outcomes, &format!("two runs, trial {trial}"));
+        assert!(
+            d.join("race.h5").exists(),
+            "one of two plain runs completes"
+        );
+        locked += outcomes
+            .iter()
+            .filter(|(_, e)| e.contains("in use"))
+            .count();
+        both_ok += usize::from(outcomes.iter().all(|(c, _)| *c == 0));
+    }
+    assert_eq!(
+        both_ok, 0,
+        "two plain runs on one output never both succeed"
+    );
+    for trial in 0..50 {
+        clear_race(d);
+        let mut first = spawn(d, &run);
+        // Kill it somewhere in its run (after 0–60 ms).
+        std::thread::sleep(Duration::from_millis(trial % 7 * 10));
+        first.kill().unwrap();
+        first.wait().unwrap();
+        let (a, b) = (spawn(d, &resume), spawn(d, &resume));
+        let outcomes = [finish(a), finish(b)];
+        check_trial(
+            d,
+            &straight,
+            &outcomes,
+            &format!("two resumes, trial {trial}"),
+        );
+        assert!(d.join("race.h5").exists(), "a resume completes");
+        locked += outcomes
+            .iter()
+            .filter(|(_, e)| e.contains("in use"))
+            .count();
+    }
+    for trial in 0..50 {
+        clear_race(d);
+        let a = spawn(d, &run);
+        std::thread::sleep(Duration::from_millis(trial % 5 * 10));
+        let b = spawn(d, &force);
+        let outcomes = [finish(a), finish(b)];
+        check_trial(
+            d,
+            &straight,
+            &outcomes,
+            &format!("--force beside a run, trial {trial}"),
+        );
+        locked += outcomes
+            .iter()
+            .filter(|(_, e)| e.contains("in use"))
+            .count();
+    }
+    assert!(
+        locked > 0,
+        "no trial overlapped: the races were not exercised"
+    );
+    assert!(!d.join("race.h5.lock").exists(), "the lock file is removed");
+}
+
+/// `--resume` does the right thing whatever is on disk: no journal starts the run,
+/// a complete result of the same study exits 0 and is left alone, a result of
+/// another study is refused; `--allow-failed` makes exit 3 an exit 0.
+#[test]
+fn resume_always_does_the_right_thing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "race.yaml", RACE);
+    let resume = ["race.yaml", "-o", "r.h5", "-q", "--resume"];
+    let first = studyrun(d, &resume);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let before = std::fs::metadata(d.join("r.h5"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    let again = studyrun(d, &resume);
+    assert!(again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr)
+        .contains("already holds this study's complete result"));
+    assert_eq!(
+        std::fs::metadata(d.join("r.h5"))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        before
+    );
+    write(d, "other.yaml", &RACE.replace("rpm: [600]", "rpm: [900]"));
+    let other = studyrun(d, &["other.yaml", "-o", "r.h5", "-q", "--resume"]);
+    assert_eq!(other.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&other.stderr);
+    assert!(
+        stderr.contains("not a complete result of this study"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::metadata(d.join("r.h5"))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        before
+    );
+    // Another shard of the same study is not this shard's result either.
+    let shard = studyrun(
+        d,
+        &[
+            "race.yaml",
+            "-o",
+            "r.h5",
+            "-q",
+            "--resume",
+            "--shard",
+            "1/2",
+        ],
+    );
+    assert_eq!(shard.status.code(), Some(1));
+
+    // A case that fails (RK4 with a step too long for the contact) and --allow-failed.
+    let failing = "name: failing\nduration: 0.02\nsample_rate: 1000\nsolver: {method: rk4, step: 0.001}\ngrid:\n  location: [crank_ground]\n  rpm: [600]\n";
+    write(d, "failing.yaml", failing);
+    let plain = studyrun(d, &["failing.yaml", "-o", "f.h5", "-q"]);
+    if plain.status.code() == Some(3) {
+        let allowed = studyrun(d, &["failing.yaml", "-o", "f2.h5", "-q", "--allow-failed"]);
+        assert_eq!(allowed.status.code(), Some(0));
+        let complete = studyrun(
+            d,
+            &[
+                "failing.yaml",
+                "-o",
+                "f2.h5",
+                "-q",
+                "--resume",
+                "--allow-failed",
+            ],
+        );
+        assert_eq!(complete.status.code(), Some(0));
+    } else {
+        panic!(
+            "the failing grid did not fail a case: {:?} {}",
+            plain.status,
+            String::from_utf8_lossy(&plain.stderr)
+        );
+    }
+}
+
+/// More shards than cases: the empty shard runs (exit 0, a file with no cases) and
+/// merge accepts it. Merge refuses a partial file, a file with pending cases and a
+/// shard given twice, naming them.
+#[test]
+fn empty_shards_merge_and_unfinished_inputs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tiny = "name: tiny\nduration: 0.02\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  rpm: [600]\n";
+    write(d, "tiny.yaml", tiny);
+    for k in 1..=3 {
+        let shard = format!("{k}/3");
+        let out = format!("p{k}.h5");
+        let r = studyrun(
+            d,
+            &["tiny.yaml", "--shard", &shard, "-o", &out, "-q", "--resume"],
+        );
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let dry = studyrun(d, &["tiny.yaml", "--shard", "3/3", "--dry-run"]);
+    assert!(
+        dry.status.success(),
+        "{}",
+        String::from_utf8_lossy(&dry.stderr)
+    );
+    assert_eq!(
+        StudyReader::open(d.join("p3.h5"))
+            .unwrap()
+            .layout()
+            .case_ids
+            .len(),
+        0
+    );
+    let merged = studyrun(d, &["merge", "all.h5", "p3.h5", "p1.h5", "p2.h5"]);
+    assert!(
+        merged.status.success(),
+        "{}",
+        String::from_utf8_lossy(&merged.stderr)
+    );
+    assert!(studyrun(d, &["tiny.yaml", "-o", "one.h5", "-q"])
+        .status
+        .success());
+    assert_same_data(&d.join("all.h5"), &d.join("one.h5"));
+
+    let twice = studyrun(d, &["merge", "x.h5", "p1.h5", "p2.h5", "p1.h5"]);
+    assert_eq!(twice.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&twice.stderr).contains("p1.h5 is given twice"));
+    std::fs::copy(d.join("p1.h5"), d.join("p1.h5.partial")).unwrap();
+    let partial = studyrun(d, &["merge", "x.h5", "p1.h5.partial", "p2.h5"]);
+    assert_eq!(partial.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&partial.stderr).contains("partial file of an unfinished run"));
+    // A killed run's partial file under another name still has pending cases.
+    let slow = "name: slow\nduration: 0.4\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
+    write(d, "slow.yaml", slow);
+    kill_when_journal_passes(
+        d,
+        &["slow.yaml", "-j", "1", "-q"],
+        &d.join("slow.h5.journal"),
+        600,
+    );
+    std::fs::copy(d.join("slow.h5.partial"), d.join("killed.h5")).unwrap();
+    let pending = studyrun(d, &["merge", "x.h5", "killed.h5"]);
+    assert_eq!(pending.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&pending.stderr);
+    assert!(
+        stderr.contains("killed.h5 has") && stderr.contains("pending cases"),
+        "{stderr}"
+    );
+    assert!(!d.join("x.h5").exists());
+}

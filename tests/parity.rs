@@ -22,9 +22,9 @@ use studyrun::bearing::kernel::APPROACH_MARGIN_TIME;
 use studyrun::bearing::{BallSet, BearingParams, DampingModel, Harmonic, RaceWaviness};
 use studyrun::bearing::{CageWeights, ContactState};
 use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, Sample, SliderCrank};
-use studyrun::multibody::{BodyRef, Pose};
+use studyrun::multibody::{BodyRef, ForceElement, Pose};
 use studyrun::numeric::simd::F64x4;
-use studyrun::solve::{integrate, Method, SolverSettings};
+use studyrun::solve::{integrate, Method, OdeSystem, SolverSettings};
 
 fn waves(n: u32, a: f64, phase: f64) -> RaceWaviness {
     RaceWaviness {
@@ -223,6 +223,90 @@ fn ideal_mechanism_in_closed_form_equals_reference() {
         };
         let pairs = paired_samples(&case, 0.2);
         assert_pointwise_parity(&format!("ideal gravity={gravity}"), &pairs);
+    }
+}
+
+/// The energy terms of docs/model.md §4.4 at one state: kinetic, potential, contact
+/// potential (J), and the ledger's rates: driver power, `∂V/∂t`, dissipation (W).
+const ENERGY_NAMES: [&str; 6] = [
+    "kinetic",
+    "potential",
+    "contact potential",
+    "driver power",
+    "dV/dt at fixed e",
+    "dissipation",
+];
+
+/// Along a reference trajectory (with its ledger), the reference's energies and
+/// ledger rates and the minimal model's (§3.8) at the same `(t, e, ė)`.
+fn paired_energies(case: &CaseParams, duration: f64) -> Vec<([f64; 6], [f64; 6])> {
+    let mut reference = CartesianSliderCrank::new(case)
+        .unwrap()
+        .with_energy_ledger(true);
+    let mut minimal = SliderCrank::new(case).unwrap().with_energy_ledger(true);
+    let y0 = reference.initial_state();
+    let times: Vec<f64> = (0..=2000).map(|k| duration * k as f64 / 2000.0).collect();
+    let settings = SolverSettings::new(Method::DormandPrince {
+        rtol: 1e-10,
+        atol: 1e-13,
+    });
+    let mut out = Vec::new();
+    let mut rates = vec![0.0; y0.len()];
+    let mut rates_min = [0.0; 7];
+    integrate(&mut reference, &settings, 0.0, &y0, &times, |m, t, y| {
+        m.system_mut().rhs(t, y, &mut rates)?;
+        let s = m.system();
+        let contact: f64 = s
+            .elements()
+            .iter()
+            .map(|e| e.energy(t, s.q(), s.qd()).potential)
+            .sum();
+        let r = [
+            s.kinetic_energy(),
+            s.potential_energy(t),
+            contact,
+            rates[4],
+            rates[5],
+            rates[6],
+        ];
+        let (e, ed) = eccentricity(case, s.q(), s.qd());
+        let y_min = [e[0], e[1], ed[0], ed[1], 0.0, 0.0, 0.0];
+        let en = minimal.energy(t, &y_min)?;
+        minimal.rhs(t, &y_min, &mut rates_min)?;
+        let mm = [
+            en.kinetic,
+            en.potential,
+            en.contact_potential,
+            rates_min[4],
+            rates_min[5],
+            rates_min[6],
+        ];
+        out.push((r, mm));
+        Ok(())
+    })
+    .unwrap();
+    out
+}
+
+/// The minimal model's energies and ledger rates (docs/model.md §3.8) equal the
+/// reference's (§4.4) at the same `(t, e, ė)` to 1e-9 of each one's range, in every
+/// scene: the two ledgers measure the same thing.
+#[test]
+fn minimal_energy_ledger_equals_reference_pointwise_in_every_scene() {
+    for (name, case) in scenes() {
+        let pairs = paired_energies(&case, 0.06);
+        for (c, field) in ENERGY_NAMES.iter().enumerate() {
+            let range = pairs.iter().map(|(r, _)| r[c].abs()).fold(0.0, f64::max);
+            let worst = pairs
+                .iter()
+                .map(|(r, m)| (r[c] - m[c]).abs())
+                .fold(0.0, f64::max);
+            println!("{name}: {field} differs by {worst:.2e} (range {range:.3e})");
+            assert!(
+                worst <= 1e-9 * range || (range == 0.0 && worst == 0.0),
+                "{name}: {field} differs by {worst:e} (range {range:e})"
+            );
+        }
     }
 }
 

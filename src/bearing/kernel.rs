@@ -83,6 +83,18 @@ pub struct Regime {
     acting: Vec<F64x4>,
 }
 
+impl Regime {
+    /// Whether ball `r` (0-based) is in the regime's loaded set.
+    pub fn loaded(&self, r: usize) -> bool {
+        self.loaded[r / LANES].0[r % LANES].to_bits() != 0
+    }
+
+    /// Whether ball `r`'s damping law is held on its acting branch.
+    pub fn acting(&self, r: usize) -> bool {
+        self.acting[r / LANES].0[r % LANES].to_bits() != 0
+    }
+}
+
 /// One ball, evaluated on its own by [`BallSet::ball`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Ball {
@@ -94,7 +106,8 @@ pub struct Ball {
     pub approach: f64,
     /// Contact force `F_r` (N), 0 when unloaded.
     pub force: f64,
-    /// Its elastic part `K δ_r^{3/2}` (N), 0 when unloaded.
+    /// Its elastic part `K δ_r^{3/2}` (N), 0 when unloaded (under a held regime,
+    /// `K δ_r |δ_r|^{1/2}` for a ball of its loaded set).
     pub elastic: f64,
     /// `dΠ_i/dψ_in` under the ball (m/rad).
     pub slope_in: f64,
@@ -683,6 +696,14 @@ impl BallSet {
     /// Ball `r` (0-based) at state `s`, computed on its own: the scalar twin of
     /// [`BallSet::force`], with each waviness height from its own `sin(N ψ_r + φ)`.
     pub fn ball(&self, r: usize, s: &ContactState) -> Ball {
+        self.ball_in(r, s, None)
+    }
+
+    /// [`BallSet::ball`] under a held `regime` (the natural law when `None`): the
+    /// scalar twin of [`BallSet::force_in`]. A ball of the regime's loaded set has
+    /// the elastic force `K δ |δ|^{1/2}` whatever the sign of `δ`, plus its damping
+    /// law's branch as the regime records it; any other ball carries nothing.
+    pub fn ball_in(&self, r: usize, s: &ContactState, regime: Option<&Regime>) -> Ball {
         let alpha = std::f64::consts::TAU * r as f64 / self.balls as f64;
         let phi = alpha + s.cage;
         let normal = [phi.cos(), phi.sin()];
@@ -703,16 +724,29 @@ impl BallSet {
             }
         }
         let approach = s.v[0] * normal[0] + s.v[1] * normal[1];
-        let (force, elastic) = if delta > 0.0 {
-            let elastic = self.stiffness * delta * delta.sqrt();
-            let force = match self.law {
-                Law::Undamped => elastic,
-                Law::CompressionOnly(c) => elastic + c * approach.max(0.0),
-                Law::TwoSided(c) => (elastic + c * approach).max(0.0),
-            };
-            (force, elastic)
-        } else {
-            (0.0, 0.0)
+        let (force, elastic) = match regime {
+            None if delta > 0.0 => {
+                let elastic = self.stiffness * delta * delta.sqrt();
+                let force = match self.law {
+                    Law::Undamped => elastic,
+                    Law::CompressionOnly(c) => elastic + c * approach.max(0.0),
+                    Law::TwoSided(c) => (elastic + c * approach).max(0.0),
+                };
+                (force, elastic)
+            }
+            Some(held) if held.loaded(r) => {
+                let elastic = self.stiffness * delta * delta.abs().sqrt();
+                let acting = held.acting(r);
+                let force = match self.law {
+                    Law::Undamped => elastic,
+                    Law::CompressionOnly(c) if acting => elastic + c * approach,
+                    Law::CompressionOnly(_) => elastic,
+                    Law::TwoSided(c) if acting => elastic + c * approach,
+                    Law::TwoSided(_) => 0.0,
+                };
+                (force, elastic)
+            }
+            _ => (0.0, 0.0),
         };
         Ball {
             normal,

@@ -4,9 +4,11 @@
 //! the reference it is tested against, which also carries the energy ledger).
 
 mod cartesian;
+mod model;
 mod params;
 mod slider_crank;
 
 pub use cartesian::CartesianSliderCrank;
+pub use model::CaseModel;
 pub use params::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
-pub use slider_crank::SliderCrank;
+pub use slider_crank::{Energy, SliderCrank};

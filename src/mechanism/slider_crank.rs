@@ -17,13 +17,19 @@
 //! force on the rod from the crank from the rod-and-slider's x balance and the rod's
 //! moment balance about the slider pin, the ground reaction from the crank's balance.
 //!
+//! With [`SliderCrank::with_energy_ledger`] three quadratures ride along in the
+//! state, `(W_driver, ∫∂V/∂t dt, E_dissipated)` after `(ex, ey, ėx, ėy)`, for the
+//! energy balance of docs/model.md §4.4 (§3.8); off by default, and a run without it
+//! evaluates exactly what it did before the ledger existed.
+//!
 //! Constraints hold exactly by construction (no drift, no Newton iteration). The
 //! general Cartesian model ([`super::CartesianSliderCrank`]) is kept as the reference: the
 //! parity tests compare the two. The ideal mechanism has no state at all and is
 //! sampled in closed form.
 
-use crate::bearing::{BallSet, BallSum, CageWeights, Regime};
+use crate::bearing::{BallSet, BallSum, CageWeights, ContactState, Regime};
 use crate::error::{ModelError, ParamError};
+use crate::multibody::Ledger;
 use crate::numeric::simd::{dispatch, Isa, LaneTask, Lanes};
 use crate::solve::OdeSystem;
 
@@ -37,6 +43,8 @@ struct Constants {
     /// `1/L3` (1/m).
     inv_l3: f64,
     m2: f64,
+    /// Crank inertia (kg m²): only in the kinetic energy (§3.8), never in `ë`.
+    j2: f64,
     m3: f64,
     j3: f64,
     m4: f64,
@@ -80,6 +88,7 @@ impl Constants {
             l3: mp.rod_length,
             inv_l3,
             m2,
+            j2: mp.crank_inertia,
             m3,
             j3,
             m4,
@@ -177,7 +186,98 @@ impl Constants {
         let [i11, i12, i22] = kin.inv_mass;
         [i11 * bx + i12 * by, i12 * bx + i22 * by]
     }
+
+    /// The bodies' accelerations for `ë = edd` (m/s²) (§3.2).
+    #[inline(always)]
+    fn accelerations(&self, kin: &Kinematics, edd: [f64; 2]) -> Accelerations {
+        let (tan, cg) = (kin.tan, self.crank_moves);
+        Accelerations {
+            theta_dd: kin.k_theta * edd[1] + kin.theta_dd0,
+            rod_dd: [
+                edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
+                0.5 * edd[1] + kin.rod_dd0[1],
+            ],
+            slider_dd: edd[0] + tan * edd[1] + kin.slider_dd0,
+            crank_dd: [
+                cg * edd[0] + kin.crank_dd0[0],
+                cg * edd[1] + kin.crank_dd0[1],
+            ],
+        }
+    }
+
+    /// Driver torque (N m, §3.4): d'Alembert over a virtual δθ2 at fixed e, under
+    /// which the big end moves by L2 u⊥ δθ2 and the bearing force does no work.
+    #[inline(always)]
+    fn driver_torque(&self, kin: &Kinematics, acc: &Accelerations) -> f64 {
+        let k = self;
+        let (u, tan) = (kin.u, kin.tan);
+        let Accelerations {
+            theta_dd,
+            rod_dd,
+            slider_dd,
+            crank_dd,
+        } = *acc;
+        let da = [-k.l2 * u[1], k.l2 * u[0]];
+        k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
+            + k.j3 * theta_dd * kin.k_theta * da[1]
+            + k.m3 * (rod_dd[0] * (da[0] + 0.5 * tan * da[1]) + (rod_dd[1] + k.g) * 0.5 * da[1])
+            + k.m4 * slider_dd * (da[0] + tan * da[1])
+    }
+
+    /// Kinetic and gravitational potential energy (J) at eccentricity `e` (m), its
+    /// rate `ed` (m/s) and crank angle `ω t` given as `u = (cos, sin)` (§3.8), from
+    /// the body velocities of §3.1: `Ȧ = ė + L2 ω u⊥`, `θ̇3 = k_θ Ȧ_y`,
+    /// `ẋ4 = Ȧ_x + tan θ3 Ȧ_y`, `ṙ3 = ((Ȧ_x + ẋ4)/2, Ȧ_y/2)`, `ṙ2 = c_g ė + (L2/2) ω u⊥`.
+    fn body_energies(&self, kin: &Kinematics, e: [f64; 2], ed: [f64; 2]) -> (f64, f64) {
+        let k = self;
+        let (u, cg) = (kin.u, k.crank_moves);
+        let tip = [-k.l2 * k.omega * u[1], k.l2 * k.omega * u[0]];
+        let big_end = [ed[0] + tip[0], ed[1] + tip[1]];
+        let rod_rate = kin.k_theta * big_end[1];
+        let slider = big_end[0] + kin.tan * big_end[1];
+        let rod = [0.5 * (big_end[0] + slider), 0.5 * big_end[1]];
+        let crank = [cg * ed[0] + 0.5 * tip[0], cg * ed[1] + 0.5 * tip[1]];
+        let square = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
+        let kinetic = 0.5
+            * (k.m2 * square(crank)
+                + k.j2 * k.omega * k.omega
+                + k.m3 * square(rod)
+                + k.j3 * rod_rate * rod_rate
+                + k.m4 * slider * slider);
+        // Heights: crank centre c_g e_y + (L2/2) sin ωt, rod centre A_y/2; the
+        // slider stays on the guide.
+        let big_end_y = e[1] + k.l2 * u[1];
+        let gravity = k.g * (k.m2 * (cg * e[1] + 0.5 * k.l2 * u[1]) + k.m3 * 0.5 * big_end_y);
+        (kinetic, gravity)
+    }
 }
+
+/// The bodies' accelerations at one `(t, e, ė, ë)`.
+#[derive(Debug, Clone, Copy)]
+struct Accelerations {
+    /// `θ̈3` (rad/s²).
+    theta_dd: f64,
+    /// Rod centre, slider and crank centre (m/s²).
+    rod_dd: [f64; 2],
+    slider_dd: f64,
+    crank_dd: [f64; 2],
+}
+
+/// The energies of one state of [`SliderCrank`] (J), for the balance of
+/// docs/model.md §4.4 (§3.8).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Energy {
+    /// Kinetic energy of crank, rod and slider (J).
+    pub kinetic: f64,
+    /// Potential energy: the bearing's Hertz potential (natural law) plus gravity's
+    /// when on (J).
+    pub potential: f64,
+    /// The bearing's Hertz potential `Σ 0.4 K δ_r^{5/2}` over the loaded balls (J).
+    pub contact_potential: f64,
+}
+
+/// Number of energy-ledger quadratures appended to the state.
+const LEDGER_LEN: usize = 3;
 
 /// The bearing at its location.
 #[derive(Debug, Clone)]
@@ -231,6 +331,8 @@ pub struct SliderCrank {
     bearing: Option<Bearing>,
     /// The instruction set of the right-hand side ([`Isa::detect`] by default).
     isa: Isa,
+    /// Whether the energy ledger's quadratures ride along in the state.
+    ledger: bool,
 }
 
 impl SliderCrank {
@@ -264,7 +366,126 @@ impl SliderCrank {
             ),
             bearing,
             isa: Isa::detect(),
+            ledger: false,
         })
+    }
+
+    /// Turns the energy ledger on or off (docs/model.md §3.8): with it, a bearing
+    /// case's state is `(ex, ey, ėx, ėy, W_driver, ∫∂V/∂t dt, E_dissipated)` and
+    /// the right-hand side also evaluates the driver's power `T ω`, the bearing's
+    /// `∂V/∂t` at fixed `e` and its dissipation, for the forces it applies (under a
+    /// held regime, the regime's). The ideal mechanism has no state and no ledger.
+    #[must_use]
+    pub fn with_energy_ledger(mut self, on: bool) -> Self {
+        self.ledger = on && self.bearing.is_some();
+        self
+    }
+
+    /// Reads the ledger from a state vector (zeros when the ledger is off).
+    pub fn ledger(&self, y: &[f64]) -> Ledger {
+        if !self.ledger {
+            return Ledger::default();
+        }
+        Ledger {
+            driver_work: y[4],
+            explicit_potential_work: y[5],
+            dissipated: y[6],
+        }
+    }
+
+    /// Kinetic and potential energy at time `t` (s) and state `y` (§3.8); the
+    /// potential uses the natural law (a ball is loaded when `δ > 0`).
+    pub fn energy(&mut self, t: f64, y: &[f64]) -> Result<Energy, ModelError> {
+        let k = &self.k;
+        let crank = k.omega * t;
+        let (e, ed) = match self.bearing {
+            Some(_) => ([y[0], y[1]], [y[2], y[3]]),
+            None => ([0.0; 2], [0.0; 2]),
+        };
+        let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+        let (kinetic, gravity) = k.body_energies(&kin, e, ed);
+        let contact_potential = match &self.bearing {
+            Some(w) => {
+                let state = self.contact_state(crank, &kin, e, ed);
+                (0..w.balls.len())
+                    .map(|r| w.balls.ball(r, &state))
+                    .filter(|b| b.delta > 0.0)
+                    .map(|b| 0.4 * b.elastic * b.delta)
+                    .sum()
+            }
+            None => 0.0,
+        };
+        Ok(Energy {
+            kinetic,
+            potential: gravity + contact_potential,
+            contact_potential,
+        })
+    }
+
+    /// The bearing's contact state at crank angle `crank` (rad) with kinematics `kin`.
+    fn contact_state(
+        &self,
+        crank: f64,
+        kin: &Kinematics,
+        e: [f64; 2],
+        ed: [f64; 2],
+    ) -> ContactState {
+        let (journal, housing) = race_turns(self.location, crank, kin);
+        let weights = self.bearing.as_ref().map_or(
+            CageWeights {
+                journal: 0.0,
+                housing: 0.0,
+            },
+            |w| w.weights,
+        );
+        weights.contact_state(e, ed, journal, housing)
+    }
+
+    /// The ledger's rates at `(t, y)` after [`SliderCrank::solve`] gave `kin` and
+    /// `edd`: the driver's power `T ω` (W), the bearing's `∂V/∂t` at fixed `e` (W)
+    /// and its dissipation (W), for the ball forces the right-hand side applied
+    /// (the held regime's when `held`), ball by ball from the kernel's scalar twin.
+    fn ledger_rates(
+        &self,
+        t: f64,
+        y: &[f64],
+        kin: &Kinematics,
+        edd: [f64; 2],
+        held: bool,
+    ) -> [f64; 3] {
+        let k = &self.k;
+        let torque = k.driver_torque(kin, &k.accelerations(kin, edd));
+        let Some(w) = self.bearing.as_ref() else {
+            return [torque * k.omega, 0.0, 0.0];
+        };
+        let crank = k.omega * t;
+        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let state = self.contact_state(crank, kin, e, ed);
+        // Race rates: the journal turns with the crank (crank_ground) or the rod
+        // (crank_rod, θ̇3 = k_θ Ȧ_y), the housing with the ground or the crank.
+        let (journal_rate, housing_rate) = match self.location {
+            Location::CrankRod => {
+                let big_end_y = ed[1] + k.l2 * k.omega * kin.u[0];
+                (kin.k_theta * big_end_y, k.omega)
+            }
+            _ => (k.omega, 0.0),
+        };
+        let cage_rate = w.weights.journal * journal_rate + w.weights.housing * housing_rate;
+        let (psi_in_rate, psi_out_rate) = (cage_rate - journal_rate, cage_rate - housing_rate);
+        let regime = held.then_some(&w.regime);
+        let (mut rate, mut dissipation) = (0.0, 0.0);
+        for r in 0..w.balls.len() {
+            let b = w.balls.ball_in(r, &state, regime);
+            let n = b.normal;
+            // ∂δ_r/∂t at fixed e: the ball's direction turns with the cage, the
+            // waviness under it with the ball's angle on each race.
+            let delta_rate = cage_rate * (-e[0] * n[1] + e[1] * n[0])
+                + b.slope_in * psi_in_rate
+                + b.slope_out * psi_out_rate;
+            rate += b.elastic * delta_rate;
+            dissipation += (b.force - b.elastic) * b.approach;
+        }
+        [torque * k.omega, rate, dissipation]
     }
 
     /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on
@@ -345,25 +566,14 @@ impl SliderCrank {
     fn sample_in<V: Lanes>(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
         let (kin, sum, edd) = self.solve::<V>(t, y, false)?;
         let k = self.k;
-        let (u, tan, cg) = (kin.u, kin.tan, k.crank_moves);
-        let theta_dd = kin.k_theta * edd[1] + kin.theta_dd0;
-        let rod_dd = [
-            edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
-            0.5 * edd[1] + kin.rod_dd0[1],
-        ];
-        let slider_dd = edd[0] + tan * edd[1] + kin.slider_dd0;
-        let crank_dd = [
-            cg * edd[0] + kin.crank_dd0[0],
-            cg * edd[1] + kin.crank_dd0[1],
-        ];
-
-        // Driver torque: d'Alembert over a virtual δθ2 at fixed e, under which the
-        // big end moves by L2 u⊥ δθ2 and the bearing force does no work.
-        let da = [-k.l2 * u[1], k.l2 * u[0]];
-        let crank_moment = k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
-            + k.j3 * theta_dd * kin.k_theta * da[1]
-            + k.m3 * (rod_dd[0] * (da[0] + 0.5 * tan * da[1]) + (rod_dd[1] + k.g) * 0.5 * da[1])
-            + k.m4 * slider_dd * (da[0] + tan * da[1]);
+        let acc = k.accelerations(&kin, edd);
+        let crank_moment = k.driver_torque(&kin, &acc);
+        let Accelerations {
+            theta_dd,
+            rod_dd,
+            slider_dd,
+            crank_dd,
+        } = acc;
 
         // Force R on the rod from the crank: the rod and slider's x balance, and the
         // rod's moment balance about the slider pin B (the slider's force has no arm).
@@ -403,10 +613,10 @@ impl SliderCrank {
 
 impl OdeSystem for SliderCrank {
     fn dim(&self) -> usize {
-        if self.bearing.is_some() {
-            4
-        } else {
-            0
+        match (self.bearing.is_some(), self.ledger) {
+            (false, _) => 0,
+            (true, false) => 4,
+            (true, true) => 4 + LEDGER_LEN,
         }
     }
 
@@ -415,6 +625,20 @@ impl OdeSystem for SliderCrank {
             return Ok(());
         }
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
+        if self.ledger {
+            let (edd, rates) = dispatch(
+                self.isa,
+                LedgerTask {
+                    sys: self,
+                    t,
+                    y,
+                    held,
+                },
+            )?;
+            dydt[..4].copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+            dydt[4..4 + LEDGER_LEN].copy_from_slice(&rates);
+            return Ok(());
+        }
         let edd = dispatch(
             self.isa,
             RhsTask {
@@ -472,6 +696,26 @@ impl LaneTask for RhsTask<'_> {
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
         Ok(self.sys.solve::<V>(self.t, self.y, self.held)?.2)
+    }
+}
+
+/// `ë` (m/s²) and the ledger's rates of [`OdeSystem::rhs`] with the ledger on, as a
+/// [`LaneTask`].
+struct LedgerTask<'a> {
+    sys: &'a mut SliderCrank,
+    t: f64,
+    y: &'a [f64],
+    held: bool,
+}
+
+impl LaneTask for LedgerTask<'_> {
+    type Output = Result<([f64; 2], [f64; LEDGER_LEN]), ModelError>;
+
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Self::Output {
+        let (kin, _, edd) = self.sys.solve::<V>(self.t, self.y, self.held)?;
+        let rates = self.sys.ledger_rates(self.t, self.y, &kin, edd, self.held);
+        Ok((edd, rates))
     }
 }
 

@@ -3,7 +3,8 @@
 //! dataset. A 1-D coordinate variable is made a scale with [`set_scale`] and attached to
 //! each dimension of each data variable along it with [`attach_scale`].
 //!
-//! `unsafe` code of the output module lives here and in `direct_chunk`.
+//! `unsafe` code of the output module lives here, in `direct_chunk`, `attributes`
+//! (NC_CHAR), `text` (strings) and `guard` (fork).
 
 use std::ffi::{c_char, c_int, c_uint, CString};
 

@@ -75,7 +75,7 @@ pub fn inspect(path: &Path) -> Result<String> {
                 labels.push(format!("{axis}={v}"));
             }
         }
-        let message = r.read_case(row)?.message;
+        let message = r.message(row)?;
         writeln!(
             out,
             "  case {} ({}): {message}",

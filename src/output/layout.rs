@@ -5,19 +5,19 @@
 use std::collections::HashSet;
 use std::time::SystemTime;
 
-/// Name of the case dimension and its coordinate variable (u64 case ids).
+/// Name of the case dimension and its coordinate variable (case ids, stored as int32).
 pub const CASE: &str = "case";
 /// Name of the time dimension and its coordinate variable (f64, s).
 pub const TIME: &str = "time";
 /// Name of the frequency dimension and its coordinate variable (f64, Hz).
 pub const FREQUENCY: &str = "frequency";
-/// Name of the reference dimension and its coordinate variable (u64 reference ids).
+/// Name of the reference dimension and its coordinate variable (reference ids, int32).
 pub const REFERENCE: &str = "reference";
 /// Built-in variable `[case]` i8: the [`Status`] code of each case.
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
 pub const ERROR_MESSAGE: &str = "error_message";
-/// Built-in variable `[case]` u64: the `reference` row each case is compared with.
+/// Built-in variable `[case]` int32: the `reference` row each case is compared with.
 pub const REFERENCE_INDEX: &str = "reference_index";
 
 /// Variable attribute naming a caller variable's role (see [`Role`]).
@@ -37,6 +37,9 @@ const RESERVED: [&str; 7] = [
     ERROR_MESSAGE,
     REFERENCE_INDEX,
 ];
+
+/// Largest id: ids are stored as int32, the widest integer CF-1.8 allows.
+pub const MAX_ID: u64 = i32::MAX as u64;
 
 /// Largest chunk HDF5 accepts (bytes): a chunk is one case's series or spectrum.
 const MAX_CHUNK_BYTES: usize = u32::MAX as usize;
@@ -246,14 +249,15 @@ impl Role {
 /// `[reference, ...]` variable follow `reference_ids`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
-    /// Global case ids (any distinct values, not necessarily `0..n`); none for an empty
-    /// shard.
+    /// Global case ids (any distinct values up to [`MAX_ID`], not necessarily `0..n`);
+    /// none for an empty shard.
     pub case_ids: Vec<u64>,
     /// Sample times of every series (s); non-empty if there are series.
     pub times: Vec<f64>,
     /// Bin frequencies of every spectrum (Hz); non-empty if there are spectra.
     pub frequencies: Vec<f64>,
-    /// Ids of the reference (ideal mechanism) runs, distinct; at least one.
+    /// Ids of the reference (ideal mechanism) runs, distinct, up to [`MAX_ID`]; at
+    /// least one.
     pub reference_ids: Vec<u64>,
     /// Per-case time series `[case, time]`.
     pub series: Vec<VarSpec>,
@@ -278,9 +282,12 @@ pub struct Layout {
 
 /// The provenance root attributes: `Conventions` (`CF-1.8`), `studyrun_version`
 /// (the crate version), `git_commit` (short hash at build time, `unknown` outside a
-/// checkout) and `created` (now, RFC 3339, UTC, whole seconds).
+/// checkout), `created` (now, RFC 3339, UTC, whole seconds) and `history` (CF §2.6.2:
+/// `<created>: <command line>`, see [`command_line`]; stored as netCDF's NC_CHAR, so
+/// that NCO puts its own lines on top).
 pub fn provenance() -> Vec<(String, AttrValue)> {
     let created = humantime::format_rfc3339_seconds(SystemTime::now()).to_string();
+    let history = history_line(&created, &command_line());
     vec![
         ("Conventions".to_owned(), "CF-1.8".into()),
         (
@@ -289,7 +296,60 @@ pub fn provenance() -> Vec<(String, AttrValue)> {
         ),
         ("git_commit".to_owned(), env!("STUDYRUN_GIT_COMMIT").into()),
         ("created".to_owned(), created.into()),
+        ("history".to_owned(), history.into()),
     ]
+}
+
+/// One line of a `history` attribute: `<time>: <command>`.
+pub fn history_line(time: &str, command: &str) -> String {
+    format!("{time}: {command}")
+}
+
+/// This process's command line for `history`: `studyrun <arguments>` when the program
+/// is `studyrun`, else `<program> <arguments> (studyrun <version>)`; arguments with
+/// spaces or shell characters are single-quoted, line breaks shown as `\n`.
+pub fn command_line() -> String {
+    let mut args = std::env::args_os().map(|a| a.to_string_lossy().into_owned());
+    let program = args
+        .next()
+        .map(|p| {
+            std::path::Path::new(&p)
+                .file_name()
+                .map_or(p.clone(), |n| n.to_string_lossy().into_owned())
+        })
+        .unwrap_or_default();
+    let words: Vec<String> = args.map(|a| shell_word(&a)).collect();
+    let line = std::iter::once(if program == "studyrun" {
+        program.clone()
+    } else {
+        shell_word(&program)
+    })
+    .chain(words)
+    .collect::<Vec<_>>()
+    .join(" ");
+    if program == "studyrun" {
+        line
+    } else {
+        format!("{line} (studyrun {})", env!("CARGO_PKG_VERSION"))
+    }
+}
+
+/// `word` as a shell would need it: as it is if plain, else single-quoted; NULs and
+/// line breaks (which would break a `history` line) escaped.
+pub(super) fn shell_word(word: &str) -> String {
+    let word = word
+        .replace('\0', "\\0")
+        .replace('\n', "\\n")
+        .replace('\r', "\\r");
+    let plain = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_alphanumeric() || "-_./=:,+%@^".contains(c));
+    if plain {
+        word
+    } else {
+        format!("'{}'", word.replace('\'', "'\\''"))
+    }
 }
 
 impl Layout {
@@ -435,8 +495,13 @@ impl Layout {
     }
 }
 
-/// Checks that a coordinate's ids are distinct.
+/// Checks that a coordinate's ids are distinct and fit the stored int32.
 fn distinct(dim: &str, ids: &[u64]) -> Result<(), String> {
+    if let Some(id) = ids.iter().find(|&&id| id > MAX_ID) {
+        return Err(format!(
+            "`{dim}` id {id} is above {MAX_ID}: ids are stored as int32, the widest integer CF-1.8 allows"
+        ));
+    }
     let mut seen = HashSet::with_capacity(ids.len());
     match ids.iter().find(|id| !seen.insert(**id)) {
         Some(id) => Err(format!("`{dim}` id {id} appears twice")),
@@ -477,8 +542,16 @@ mod tests {
     #[test]
     fn inconsistent_layouts_are_refused_by_name() {
         type Edit = fn(&mut Layout);
-        let cases: [(Edit, &str); 8] = [
+        let cases: [(Edit, &str); 10] = [
             (|l| l.case_ids = vec![1, 1], "`case` id 1"),
+            (
+                |l| l.case_ids = vec![1, 1 << 31],
+                "`case` id 2147483648 is above 2147483647",
+            ),
+            (
+                |l| l.reference_ids = vec![u64::MAX],
+                "`reference` id 18446744073709551615 is above",
+            ),
             (
                 |l| l.reference_index = vec![0, 1],
                 "`reference_index` holds row 1",
@@ -522,5 +595,23 @@ mod tests {
         };
         assert!(humantime::parse_rfc3339(&created).is_ok(), "{created}");
         assert!(matches!(get("git_commit"), Some(AttrValue::Str(c)) if !c.is_empty()));
+        let Some(AttrValue::Str(history)) = get("history") else {
+            panic!("no history attribute")
+        };
+        assert!(
+            history.starts_with(&format!("{created}: ")) && history.contains("studyrun"),
+            "{history}"
+        );
+        assert!(!history.contains('\n'), "{history}");
+    }
+
+    #[test]
+    fn shell_words_are_quoted_when_needed() {
+        assert_eq!(shell_word("studies/smoke.yaml"), "studies/smoke.yaml");
+        assert_eq!(shell_word("--shard=1/2"), "--shard=1/2");
+        assert_eq!(shell_word("my file.h5"), "'my file.h5'");
+        assert_eq!(shell_word("it's"), "'it'\\''s'");
+        assert_eq!(shell_word(""), "''");
+        assert_eq!(shell_word("a\nb"), "'a\\nb'");
     }
 }

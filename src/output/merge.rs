@@ -2,7 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{side_paths, OutputLock};
+use std::time::SystemTime;
+
+use super::layout::shell_word;
+use super::{history_line, side_paths, OutputLock, VarSpec};
 use crate::error::RunError;
 use crate::output::{AttrValue, CaseRecord, Layout, ParamValues, Status, StudyReader, StudyWriter};
 
@@ -15,10 +18,36 @@ fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), RunError> {
     }
 }
 
+/// Whether `a` and `b` hold the same variables (names, units, long names), in any
+/// order (ncks sorts them by name).
+fn same_variables<'a>(
+    a: impl IntoIterator<Item = &'a VarSpec>,
+    b: impl IntoIterator<Item = &'a VarSpec>,
+) -> bool {
+    let mut a: Vec<&VarSpec> = a.into_iter().collect();
+    let mut b: Vec<&VarSpec> = b.into_iter().collect();
+    a.sort_by(|x, y| x.name.cmp(&y.name));
+    b.sort_by(|x, y| x.name.cmp(&y.name));
+    a == b
+}
+
+/// For each variable of `want`, its index in `have` (same names, checked before).
+fn positions(want: &[VarSpec], have: &[VarSpec]) -> Vec<usize> {
+    want.iter()
+        .map(|w| {
+            have.iter()
+                .position(|h| h.name == w.name)
+                .expect("same variables")
+        })
+        .collect()
+}
+
 /// Merges `shards` (files of `studyrun --shard K/N` runs of one study) into `output`.
 /// Every case of the study must be present exactly once, in finished shard files
-/// (no partial files, no pending cases); empty shards are allowed. Returns the
-/// number of cases.
+/// (no partial files, no pending cases); empty shards are allowed. Shards that netCDF
+/// tools rewrote are merged too: variables are matched by name, whatever their
+/// order. The merged file's variables are in the first shard's order; its `history`
+/// is the first shard's with the merge's line on top. Returns the number of cases.
 pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, RunError> {
     ensure(!shards.is_empty(), || {
         "merge needs at least one shard file".into()
@@ -83,12 +112,16 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             },
         )?;
         let l = r.layout();
+        fn params(l: &Layout) -> impl Iterator<Item = &VarSpec> {
+            l.parameters.iter().map(|p| &p.spec)
+        }
         ensure(
             l.times == first.times
                 && l.frequencies == first.frequencies
-                && l.series == first.series
-                && l.spectra == first.spectra
-                && l.metrics == first.metrics
+                && same_variables(&l.series, &first.series)
+                && same_variables(&l.spectra, &first.spectra)
+                && same_variables(&l.metrics, &first.metrics)
+                && same_variables(params(l), params(first))
                 && l.reference_ids == first.reference_ids,
             || {
                 format!(
@@ -136,6 +169,32 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         )
     })?;
 
+    // Each shard's variables in the first shard's order.
+    struct Order {
+        series: Vec<usize>,
+        spectra: Vec<usize>,
+        metrics: Vec<usize>,
+        parameters: Vec<usize>,
+    }
+    let shard_order: Vec<Order> = readers
+        .iter()
+        .map(|r| {
+            let l = r.layout();
+            let specs = |l: &Layout| l.parameters.iter().map(|p| p.spec.clone()).collect();
+            let (want, have): (Vec<VarSpec>, Vec<VarSpec>) = (specs(first), specs(l));
+            Order {
+                series: positions(&first.series, &l.series),
+                spectra: positions(&first.spectra, &l.spectra),
+                metrics: positions(&first.metrics, &l.metrics),
+                parameters: positions(&want, &have),
+            }
+        })
+        .collect();
+    // The cases are read below: check first that reading them cannot crash.
+    for (r, path) in readers.iter().zip(shards) {
+        r.check_cases().map_err(RunError::file(path))?;
+    }
+
     let mut layout: Layout = first.clone();
     layout.case_ids = order.iter().map(|o| o.0).collect();
     layout.reference_index = order
@@ -147,23 +206,25 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             ParamValues::F64(_) => ParamValues::F64(
                 order
                     .iter()
-                    .map(
-                        |&(_, s, row)| match &readers[s].layout().parameters[p].values {
+                    .map(|&(_, s, row)| {
+                        let q = shard_order[s].parameters[p];
+                        match &readers[s].layout().parameters[q].values {
                             ParamValues::F64(v) => v[row],
                             ParamValues::Str(_) => f64::NAN,
-                        },
-                    )
+                        }
+                    })
                     .collect(),
             ),
             ParamValues::Str(_) => ParamValues::Str(
                 order
                     .iter()
-                    .map(
-                        |&(_, s, row)| match &readers[s].layout().parameters[p].values {
+                    .map(|&(_, s, row)| {
+                        let q = shard_order[s].parameters[p];
+                        match &readers[s].layout().parameters[q].values {
                             ParamValues::Str(v) => v[row].clone(),
                             ParamValues::F64(_) => String::new(),
-                        },
-                    )
+                        }
+                    })
                     .collect(),
             ),
         };
@@ -174,6 +235,14 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             "shard" => *value = AttrValue::Str(String::new()),
             _ => {}
         }
+    }
+    let line = merge_history_line(output, shards, force);
+    match layout.attributes.iter_mut().find(|(n, _)| n == "history") {
+        Some((_, AttrValue::Str(h))) if !h.is_empty() => *h = format!("{line}\n{h}"),
+        Some((_, value)) => *value = AttrValue::Str(line),
+        None => layout
+            .attributes
+            .push(("history".to_owned(), AttrValue::Str(line))),
     }
     let (_, partial) = side_paths(output);
     let to_partial = RunError::file(&partial);
@@ -191,15 +260,17 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         let c = readers[s]
             .read_case(src)
             .map_err(RunError::file(&shards[s]))?;
-        let series: Vec<&[f64]> = c.series.iter().map(Vec::as_slice).collect();
-        let spectra: Vec<&[f64]> = c.spectra.iter().map(Vec::as_slice).collect();
+        let o = &shard_order[s];
+        let series: Vec<&[f64]> = o.series.iter().map(|&i| c.series[i].as_slice()).collect();
+        let spectra: Vec<&[f64]> = o.spectra.iter().map(|&i| c.spectra[i].as_slice()).collect();
+        let metrics: Vec<f64> = o.metrics.iter().map(|&i| c.metrics[i]).collect();
         writer
             .write_case(
                 row,
                 &CaseRecord {
                     series: &series,
                     spectra: &spectra,
-                    metrics: &c.metrics,
+                    metrics: &metrics,
                     status: c.status,
                     message: &c.message,
                 },
@@ -212,4 +283,19 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         output,
     ))?;
     Ok(order.len())
+}
+
+/// The merge's `history` line: `<now>: studyrun merge [--force] OUTPUT SHARD...`.
+fn merge_history_line(output: &Path, shards: &[PathBuf], force: bool) -> String {
+    let now = humantime::format_rfc3339_seconds(SystemTime::now()).to_string();
+    let mut words = vec!["studyrun".to_owned(), "merge".to_owned()];
+    if force {
+        words.push("--force".to_owned());
+    }
+    words.extend(
+        std::iter::once(output)
+            .chain(shards.iter().map(PathBuf::as_path))
+            .map(|p| shell_word(&p.to_string_lossy())),
+    );
+    history_line(&now, &words.join(" "))
 }

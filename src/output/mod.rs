@@ -5,12 +5,12 @@
 //!
 //! | variable | dims | dtype | units | written |
 //! |---|---|---|---|---|
-//! | `case` | `[case]` | u64 | `1` | at create: global case ids (any distinct values) |
+//! | `case` | `[case]` | i32 | `1` | at create: global case ids (any distinct values up to [`MAX_ID`]) |
 //! | `time` | `[time]` | f64 | `s` | at create: sample times |
 //! | `frequency` | `[frequency]` | f64 | `Hz` | at create: spectrum bin frequencies |
-//! | `reference` | `[reference]` | u64 | `1` | at create: reference (ideal mechanism) run ids |
+//! | `reference` | `[reference]` | i32 | `1` | at create: reference (ideal mechanism) run ids |
 //! | *parameter* | `[case]` | f64 or string | caller's | at create |
-//! | `reference_index` | `[case]` | u64 | `1` | at create: `reference` row each case is compared with |
+//! | `reference_index` | `[case]` | i32 | `1` | at create: `reference` row each case is compared with |
 //! | `status` | `[case]` | i8 | `1` | per case: `flag_values` `[0, 1, 2]`, `flag_meanings` `pending ok failed`; fill 0 |
 //! | `error_message` | `[case]` | string | `1` | per case: why it failed, empty otherwise |
 //! | *metric* | `[case]` | f64 | caller's | per case; fill NaN |
@@ -27,9 +27,26 @@
 //! are variable-length UTF-8. The coordinate variables are the dimension scales and
 //! carry netCDF-C's `_Netcdf4Dimid`.
 //!
+//! The ids are int32 because CF-1.8 has no 64-bit or unsigned integers; a layout with
+//! an id above [`MAX_ID`] is refused at create. Older files with u64 ids read as well.
+//!
 //! Root attributes: `studyrun_file_format` = 1 (i64, marks a study file) and the
 //! caller's [`Layout::attributes`] in order (strings, f64 or i64); [`provenance`] gives
-//! `Conventions`, `studyrun_version`, `git_commit` and `created` (RFC 3339).
+//! `Conventions`, `studyrun_version`, `git_commit`, `created` (RFC 3339) and `history`
+//! (CF §2.6.2: `<time>: studyrun <arguments>`, newest line first; [`merge`] puts its
+//! line on top of the first shard's). `history` is netCDF's NC_CHAR (a fixed-length
+//! string), the type NCO appends to; every other string is variable-length UTF-8.
+//!
+//! Interoperability: netCDF tools rewrite what they touch (`ncatted` writes NC_CHAR,
+//! `nccopy -k nc4`, `ncks` and xarray make every attribute a one-element array and add
+//! `_NCProperties`, `_Netcdf4Coordinates`, `_Netcdf4Dimid`; `ncks` sorts the variables
+//! by name). [`StudyReader`] reads such files: strings of any kind (variable- or
+//! fixed-length, any character set, NUL padding stripped, a NULL dataspace as ""), any
+//! one-element dataspace as a scalar; it skips root attributes starting with `_` and
+//! root attributes that are neither a string nor a number (arrays). [`merge`] matches
+//! the shards' variables by name. A damaged file is an error, never a crash: strings
+//! are read without letting libhdf5 follow them into the file (`text`), and the reads
+//! are first done in a child process (`guard`), see [`StudyReader`].
 //!
 //! Storage: `[case, *]` and `[reference, time]` arrays are chunked one row per chunk
 //! (chunk shape `(1, len)`), so writing or reading a case touches one chunk per
@@ -48,6 +65,7 @@ mod dimension_scales;
 mod direct_chunk;
 mod encode;
 mod error;
+mod guard;
 mod inspect;
 mod layout;
 mod lock;
@@ -58,6 +76,7 @@ mod reader;
 mod reserve;
 mod shuffle;
 mod study_layout;
+mod text;
 mod writer;
 
 pub use dimension_scales::ScaleError;
@@ -65,8 +84,8 @@ pub use encode::ChunkEncoder;
 pub use error::StudyFileError;
 pub use inspect::inspect;
 pub use layout::{
-    provenance, AttrValue, Layout, Param, ParamValues, Status, Storage, VarSpec, CASE,
-    ERROR_MESSAGE, FREQUENCY, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
+    command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
+    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
 };
 pub use lock::OutputLock;
 pub use merge::merge;

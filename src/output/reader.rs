@@ -3,16 +3,18 @@
 use std::path::{Path, PathBuf};
 
 use hdf5::filters::Filter;
-use hdf5::types::{TypeDescriptor, VarLenAscii, VarLenUnicode};
+use hdf5::types::TypeDescriptor;
 use hdf5::{Dataset, File, IndexType, IterationOrder};
 
 use super::attributes;
 use super::datasets::{check_row, RowDatasets};
 use super::error::{AtVariable, StudyFileError};
+use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
     FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
 };
+use super::text::{self, Strings};
 
 /// One case read back from a file (owned). Values stored as float32 are widened
 /// exactly to f64; rows never written read as NaN with status pending.
@@ -30,11 +32,19 @@ pub struct CaseData {
     pub message: String,
 }
 
-/// Reads a study file written by [`StudyWriter`](super::StudyWriter).
+/// Reads a study file written by [`StudyWriter`](super::StudyWriter), also after
+/// netCDF tools (NCO, nccopy, xarray) rewrote it: see the module doc of
+/// [`output`](super).
+///
+/// A damaged file gives an error, never a crash: [`StudyReader::open`] and
+/// [`StudyReader::check_cases`] first do their reads in a child process (see
+/// `output::guard`).
 pub struct StudyReader {
     path: PathBuf,
     layout: Layout,
     rows: RowDatasets,
+    /// `error_message`, read whole at open (it is small).
+    messages: Vec<String>,
     /// Kept open for the datasets' lifetime.
     _file: File,
 }
@@ -48,16 +58,53 @@ impl std::fmt::Debug for StudyReader {
 }
 
 impl StudyReader {
-    /// Opens the study file at `path` read-only and reads its layout.
+    /// Opens the study file at `path` read-only and reads its layout, the statuses
+    /// and the error messages. What [`StudyReader::read_case`] and
+    /// [`StudyReader::read_reference`] read later is not checked for crashes here:
+    /// call [`StudyReader::check_cases`] before reading the cases of a file that may
+    /// be damaged.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
-        let path = path.as_ref().to_owned();
+        let path = path.as_ref();
+        let checked = guard::check(guard::deadline(path, false), || {
+            Self::open_unchecked(path).and_then(|r| r.statuses().map(|_| ()))
+        });
+        if let Checked::Crashed(reason) = checked {
+            return Err(damaged(path, reason));
+        }
+        Self::open_unchecked(path)
+    }
+
+    /// Reads every case and reference in a child process (see `output::guard`): an
+    /// error if that crashes or does not end, so that reading them here cannot crash.
+    /// Errors the reads themselves report are left for them.
+    pub fn check_cases(&self) -> Result<(), StudyFileError> {
+        let checked = guard::check(guard::deadline(&self.path, true), || {
+            // SAFETY: this runs only in the forked child, in its own copy of this
+            // process's memory: the copy of `self` is moved out and dropped there
+            // (closing the file as this process will later), and the child leaves
+            // with `_exit` without touching `self` again.
+            let r: StudyReader = unsafe { std::ptr::read(self) };
+            (0..r.layout.n_references()).try_for_each(|k| r.read_reference(k).map(|_| ()))?;
+            (0..r.layout.n_cases()).try_for_each(|row| r.read_case(row).map(|_| ()))
+        });
+        match checked {
+            Checked::Survived => Ok(()),
+            Checked::Crashed(reason) => Err(damaged(&self.path, reason)),
+        }
+    }
+
+    /// [`StudyReader::open`] without the check in a child process.
+    pub(super) fn open_unchecked(path: &Path) -> Result<Self, StudyFileError> {
+        let path = path.to_owned();
         let file = File::open(&path).at(&path, "/")?;
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
+        let messages = read_messages(&rows.error_message, layout.n_cases(), &path)?;
         Ok(Self {
             path,
             layout,
             rows,
+            messages,
             _file: file,
         })
     }
@@ -92,10 +139,7 @@ impl StudyReader {
             .zip(&self.layout.metrics)
             .map(|(ds, spec)| read_one::<f64>(ds, row).at(&self.path, &spec.name))
             .collect::<Result<_, _>>()?;
-        let message = read_one::<VarLenUnicode>(&self.rows.error_message, row)
-            .at(&self.path, ERROR_MESSAGE)?
-            .as_str()
-            .to_owned();
+        let message = self.messages[row].clone();
         let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
         Ok(CaseData {
             series,
@@ -115,6 +159,12 @@ impl StudyReader {
             &self.layout.reference_series,
             row,
         )
+    }
+
+    /// Why case row `row` failed (empty if it did not).
+    pub fn message(&self, row: usize) -> Result<&str, StudyFileError> {
+        check_row(&self.path, CASE, row, self.layout.n_cases())?;
+        Ok(&self.messages[row])
     }
 
     /// The status of every case, in row order (to find what is left to run).
@@ -158,6 +208,61 @@ fn read_one<T: hdf5::H5Type + Clone>(ds: &Dataset, row: usize) -> hdf5::Result<T
         .ok_or_else(|| hdf5::Error::from(format!("row {row} read nothing")))
 }
 
+/// The error of a file whose reading crashed (or hung) the check of `output::guard`.
+fn damaged(path: &Path, reason: String) -> StudyFileError {
+    StudyFileError::Format {
+        path: path.to_owned(),
+        variable: "/".to_owned(),
+        reason: format!("the file is damaged: {reason}"),
+    }
+}
+
+/// Reads the `error_message` column (`n` strings, any string type).
+pub(super) fn read_messages(
+    ds: &Dataset,
+    n: usize,
+    path: &Path,
+) -> Result<Vec<String>, StudyFileError> {
+    let messages = text::read_dataset_text(ds).at(path, ERROR_MESSAGE)?;
+    if messages.len() != n {
+        return Err(StudyFileError::Format {
+            path: path.to_owned(),
+            variable: ERROR_MESSAGE.to_owned(),
+            reason: format!("{} values for {n} cases", messages.len()),
+        });
+    }
+    Ok(messages)
+}
+
+/// Reads a 1-D id variable (`case`, `reference`, `reference_index`): int32 as
+/// studyrun writes them, any other integer type as other writers (or older studyrun
+/// versions, u64) left them; negative values are refused.
+fn read_ids(file: &File, name: &str, path: &Path) -> Result<Vec<u64>, StudyFileError> {
+    let ds = file.dataset(name).at(path, name)?;
+    let ids = match ds.dtype().and_then(|t| t.to_descriptor()).at(path, name)? {
+        TypeDescriptor::Unsigned(_) => ds.read_raw::<u64>().at(path, name)?,
+        TypeDescriptor::Integer(_) => {
+            let signed = ds.read_raw::<i64>().at(path, name)?;
+            if let Some(bad) = signed.iter().find(|&&v| v < 0) {
+                return Err(StudyFileError::Format {
+                    path: path.to_owned(),
+                    variable: name.to_owned(),
+                    reason: format!("negative id {bad}"),
+                });
+            }
+            signed.into_iter().map(|v| v as u64).collect()
+        }
+        other => {
+            return Err(StudyFileError::Format {
+                path: path.to_owned(),
+                variable: name.to_owned(),
+                reason: format!("type {other}, expected integers"),
+            })
+        }
+    };
+    Ok(ids)
+}
+
 /// Rebuilds the [`Layout`] of an open study file at `path`.
 pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileError> {
     let format = |reason: String, variable: &str| StudyFileError::Format {
@@ -173,24 +278,27 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
                 FORMAT_ATTR,
             ))
         }
-        Err(_) => return Err(format("no study file format attribute".into(), FORMAT_ATTR)),
+        Err(e) => {
+            return Err(format(
+                format!("no study file format attribute ({e})"),
+                FORMAT_ATTR,
+            ))
+        }
     }
 
     let read = |name: &str| file.dataset(name).at(path, name);
     let mut layout = Layout {
-        case_ids: read(CASE)?.read_raw::<u64>().at(path, CASE)?,
+        case_ids: read_ids(file, CASE, path)?,
         times: read(TIME)?.read_raw::<f64>().at(path, TIME)?,
         frequencies: read(FREQUENCY)?.read_raw::<f64>().at(path, FREQUENCY)?,
-        reference_ids: read(REFERENCE)?.read_raw::<u64>().at(path, REFERENCE)?,
+        reference_ids: read_ids(file, REFERENCE, path)?,
         series: Vec::new(),
         spectra: Vec::new(),
         metrics: Vec::new(),
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
-        reference_index: read(REFERENCE_INDEX)?
-            .read_raw::<u64>()
-            .at(path, REFERENCE_INDEX)?,
+        reference_index: read_ids(file, REFERENCE_INDEX, path)?,
         attributes: Vec::new(),
         storage: Storage::default(),
     };
@@ -253,9 +361,15 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         .attr_names_by(IndexType::CreationOrder, IterationOrder::Increasing)
         .or_else(|_| file.attr_names())
         .at(path, "/")?;
-    for name in names.into_iter().filter(|n| n != FORMAT_ATTR) {
-        let value = attributes::read(file, &name).at(path, &name)?;
-        layout.attributes.push((name, value));
+    // netCDF's own attributes (`_NCProperties`, ...) and what is neither a string nor
+    // a number (arrays, other types) are not the study's.
+    for name in names
+        .into_iter()
+        .filter(|n| n != FORMAT_ATTR && !n.starts_with('_'))
+    {
+        if let Ok(value) = attributes::read_value(file, &name).at(path, &name)? {
+            layout.attributes.push((name, value));
+        }
     }
 
     layout.validate().map_err(|reason| format(reason, "/"))?;
@@ -273,26 +387,18 @@ fn read_param(ds: &Dataset, spec: VarSpec, path: &Path) -> Result<Param, StudyFi
     let name = spec.name.clone();
     let values = match ds.dtype().and_then(|t| t.to_descriptor()).at(path, &name)? {
         TypeDescriptor::Float(_) => ParamValues::F64(ds.read_raw::<f64>().at(path, &name)?),
-        TypeDescriptor::VarLenUnicode => ParamValues::Str(
-            ds.read_raw::<VarLenUnicode>()
-                .at(path, &name)?
-                .iter()
-                .map(|s| s.as_str().to_owned())
-                .collect(),
-        ),
-        TypeDescriptor::VarLenAscii => ParamValues::Str(
-            ds.read_raw::<VarLenAscii>()
-                .at(path, &name)?
-                .iter()
-                .map(|s| s.as_str().to_owned())
-                .collect(),
-        ),
         other => {
+            if let Strings::Text(v) = text::read_dataset(ds).at(path, &name)? {
+                return Ok(Param {
+                    spec,
+                    values: ParamValues::Str(v),
+                });
+            }
             return Err(StudyFileError::Format {
                 path: path.to_owned(),
                 variable: name,
                 reason: format!("parameter of type {other}, expected float or string"),
-            })
+            });
         }
     };
     Ok(Param { spec, values })

@@ -17,7 +17,7 @@ use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
 };
-use super::reader::read_layout;
+use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
 
 /// One finished (or failed) case, borrowed from the caller.
@@ -144,13 +144,7 @@ impl Scalars {
             .map(|(ds, spec)| Ok((ds.clone(), ds.read_raw::<f64>().at(path, &spec.name)?)))
             .collect::<Result<_, StudyFileError>>()?;
         let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
-        let messages = rows
-            .error_message
-            .read_raw::<VarLenUnicode>()
-            .at(path, ERROR_MESSAGE)?
-            .iter()
-            .map(|m| m.as_str().to_owned())
-            .collect();
+        let messages = read_messages(&rows.error_message, layout.n_cases(), path)?;
         Ok(Self {
             path: path.to_owned(),
             metrics,
@@ -241,8 +235,11 @@ impl StudyWriter {
     }
 
     /// Opens an existing study file to write more rows into it (to resume a study).
-    /// Its layout is read back from the file; see [`StudyWriter::layout`].
+    /// Its layout is read back from the file; see [`StudyWriter::layout`]. Like
+    /// [`StudyReader::open`], a damaged file is an error, not a crash (its reads are
+    /// checked in a child process first).
     pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
+        drop(StudyReader::open(path.as_ref())?);
         let path = path.as_ref().to_owned();
         let file = File::with_options()
             .with_fapl(file_access)
@@ -549,7 +546,7 @@ impl Creator<'_> {
             "1",
             "row of the reference run this case is compared with",
         );
-        let ds = self.with_data(&spec.name, &l.reference_index)?;
+        let ds = self.with_data(&spec.name, &ids32(&l.reference_index))?;
         self.finish_var(&ds, &spec, None, &[&case])?;
 
         let spec = VarSpec::new(STATUS, "1", "case status");
@@ -598,10 +595,10 @@ impl Creator<'_> {
     fn coordinates(&self) -> Result<[Dataset; 4], StudyFileError> {
         let l = self.layout;
         let datasets = [
-            self.with_data(CASE, &l.case_ids)?,
+            self.with_data(CASE, &ids32(&l.case_ids))?,
             self.with_data(TIME, &l.times)?,
             self.with_data(FREQUENCY, &l.frequencies)?,
-            self.with_data(REFERENCE, &l.reference_ids)?,
+            self.with_data(REFERENCE, &ids32(&l.reference_ids))?,
         ];
         for (dimid, (ds, (name, units, long_name))) in datasets.iter().zip(COORDINATES).enumerate()
         {
@@ -707,6 +704,13 @@ impl Creator<'_> {
         }
         Ok(())
     }
+}
+
+/// Ids as stored: int32, CF-1.8's widest integer (the layout checked that they fit).
+fn ids32(ids: &[u64]) -> Vec<i32> {
+    ids.iter()
+        .map(|&id| i32::try_from(id).unwrap_or(i32::MAX))
+        .collect()
 }
 
 /// Writes the CF `_FillValue` attribute (NaN, of the variable's type).

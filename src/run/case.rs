@@ -10,14 +10,14 @@ use crate::study::Study;
 
 /// What one case contributes to the file, owned so it can cross threads.
 #[derive(Debug, Clone, PartialEq)]
-pub struct CaseResult {
+pub(crate) struct CaseResult {
     /// Row of the case in the file (position in its `case` coordinate).
     pub row: usize,
     /// Ok or failed.
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`CHANNELS`] entry (empty when failed).
+    /// One series per [`crate::simulate::CHANNELS`] entry (empty when failed).
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
@@ -29,7 +29,7 @@ pub struct CaseResult {
 
 /// Thread CPU time one case took (s), by activity.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct CaseCost {
+pub(crate) struct CaseCost {
     /// Integration and sampling.
     pub simulate: f64,
     /// Spectra (FFT) and metrics.
@@ -39,7 +39,7 @@ pub struct CaseCost {
 /// Simulates `params` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed). Never fails: a failure
 /// becomes a [`Status::Failed`] result with its message.
-pub fn run_case(
+pub(crate) fn run_case(
     study: &Study,
     row: usize,
     params: &CaseParams,

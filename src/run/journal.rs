@@ -169,16 +169,6 @@ impl JournalRecord {
         self.status
     }
 
-    /// Why the case failed (empty when ok).
-    pub fn message(&self) -> &str {
-        &self.message
-    }
-
-    /// One value per metric (NaN where unknown).
-    pub fn metrics(&self) -> &[f64] {
-        &self.metrics
-    }
-
     /// Size of the chunks (series and spectra as stored) in bytes.
     pub fn chunk_bytes(&self) -> usize {
         self.bytes.len()
@@ -593,7 +583,7 @@ mod tests {
         for (got, want) in read.iter().zip(&written) {
             assert_eq!(format!("{got:?}"), format!("{want:?}")); // NaN-aware equality
         }
-        assert_eq!(read[1].message(), "step size underflow");
+        assert_eq!(read[1].message, "step size underflow");
         assert_eq!(read[1].chunk_bytes(), 0);
         for other in [
             JournalHeader {

@@ -2,9 +2,9 @@
 //! thread-safe), bounded memory, a crash journal, resume, shards and merging.
 //!
 //! Data flow: workers (a rayon pool) take cases one at a time, the costliest first
-//! ([`order`]), simulate them, compute spectra and metrics, encode the series
+//! (`order`), simulate them, compute spectra and metrics, encode the series
 //! and spectra into the chunks the file stores (float32 conversion, shuffle, deflate)
-//! with their checksums ([`JournalRecord::encode`]), and send the records through a
+//! with their checksums (`JournalRecord::encode`), and send the records through a
 //! bounded channel; the calling thread copies each case's chunks into `OUT.h5.partial`
 //! (HDF5 direct chunk write), appends to the journal where they went, and reports
 //! progress. At the end the partial file is renamed to `OUT.h5` (atomic) and the
@@ -18,10 +18,10 @@ mod order;
 mod progress;
 mod stats;
 
-pub use case::{check_eccentricity, run_case, CaseCost, CaseResult};
-pub use journal::{
-    JournalEntry, JournalError, JournalHeader, JournalReader, JournalRecord, JournalWriter,
-};
+pub use case::check_eccentricity;
+use case::run_case;
+pub use journal::JournalError;
+use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
 pub use stats::RunStats;
 
 use std::collections::HashSet;
@@ -42,12 +42,13 @@ use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
 use crate::study::Study;
 
-/// How to run.
+/// How to run. The default writes `study.h5` in the working directory with one
+/// worker per core, refusing to replace anything, with progress on stderr.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// The result file.
     pub output: PathBuf,
-    /// Worker threads (≥ 1).
+    /// Worker threads (≥ 1; 0 counts as 1).
     pub jobs: usize,
     /// Continue an interrupted run from its journal.
     pub resume: bool,
@@ -57,6 +58,19 @@ pub struct RunOptions {
     pub shard: Option<Shard>,
     /// No progress output.
     pub quiet: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            output: PathBuf::from("study.h5"),
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            resume: false,
+            force: false,
+            shard: None,
+            quiet: false,
+        }
+    }
 }
 
 /// What a run did.
@@ -103,7 +117,7 @@ fn rename(from: &Path, to: &Path) -> Result<(), RunError> {
 }
 
 /// The ideal-mechanism runs every case is compared with.
-pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
+pub(crate) fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
     study
         .references
         .par_iter()
@@ -119,7 +133,7 @@ pub fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
 }
 
 /// The spectrum window of a study.
-pub fn window_of(study: &Study) -> Window {
+pub(crate) fn window_of(study: &Study) -> Window {
     if study.window == "rectangular" {
         Window::Rectangular
     } else {

@@ -1,4 +1,4 @@
-//! A case's signal processing, between [`crate::simulate`] and [`crate::output`]:
+//! A case's signal processing, between [`mod@crate::simulate`] and [`crate::output`]:
 //! the spectra and the vibration metrics of docs/model.md §6–§7 computed from a
 //! case's sampled outputs and the ideal mechanism's.
 
@@ -64,6 +64,11 @@ pub fn metric_specs() -> Vec<VarSpec> {
             "contact switches the integrator located and restarted at",
         ),
         VarSpec::new(
+            "stiffness_switch_time",
+            "s",
+            "time at which the explicit integrator found the case stiff and SDIRK4 took over (NaN: no switch)",
+        ),
+        VarSpec::new(
             "wall_time",
             "s",
             "wall-clock time of the case (integration, sampling, spectra)",
@@ -122,6 +127,7 @@ pub fn analyse(
         out.stats.rejected as f64,
         out.stats.rhs_evals as f64,
         out.stats.events as f64,
+        out.stats.switched_at.unwrap_or(f64::NAN),
     ]);
     debug_assert_eq!(metrics.len(), n_metrics);
     Ok(CaseAnalysis { spectra, metrics })

@@ -296,13 +296,20 @@ fn prepare_dense<S: OdeSystem>(
 /// regime with a fresh first stage. Stepping across a switch instead (where the
 /// compression-only damping force jumps and the Hertz force loses smoothness) costs
 /// cascades of rejected steps and an error of order `h`.
+///
+/// With `stiffness_test` (and a pair that has one, [`ExplicitTableau::stiffness_bound`])
+/// every accepted step is also shown to Hairer's stiffness test ([`StiffnessTest`]),
+/// which only reads the step's stages; once it fires, the run stops at the end of
+/// that step (at the switch, if one was located in it), with every sample up to
+/// there served, and returns [`Finish::Stiff`] for another method to continue.
 pub(crate) fn adaptive<S, O>(
     sys: &mut S,
     tab: &ExplicitTableau,
     p: &Problem<'_>,
     tol: Tolerance,
+    stiffness_test: bool,
     samples: &mut Samples<'_, O>,
-) -> Result<Stats, SolveError>
+) -> Result<Finish, SolveError>
 where
     S: OdeSystem,
     O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
@@ -312,6 +319,8 @@ where
     let mut w = Workspace::new(p.y0, tab);
     let n = w.n;
     let mut stats = Stats::default();
+    let mut stiffness =
+        (stiffness_test && tab.stiffness_bound > 0.0).then(|| StiffnessTest::new(tab));
     let events = p.locate_events
         && sys
             .hold_regime(p.t0, p.y0)
@@ -373,6 +382,9 @@ where
         }
         stats.steps += 1;
         model_failure = None;
+        let stiff = stiffness
+            .as_mut()
+            .is_some_and(|test| test.accepted(tab, h, &w.k));
         let event = {
             let Workspace {
                 k,
@@ -420,9 +432,16 @@ where
         let Some(theta) = event else {
             start_margin = w.margins[s - 1];
             if last {
-                return Ok(stats);
+                return Ok(Finish::Done(stats));
             }
             std::mem::swap(&mut w.y, &mut w.y_new);
+            if stiff {
+                return Ok(Finish::Stiff {
+                    t: t_end,
+                    y: w.y.clone(),
+                    stats,
+                });
+            }
             w.k.copy_within((s - 1) * n..s * n, 0);
             t = t_end;
             h = h_new;
@@ -443,10 +462,130 @@ where
             w.y_event.copy_from_slice(&w.y_new);
         }
         std::mem::swap(&mut w.y, &mut w.y_event);
+        if stiff {
+            return Ok(Finish::Stiff {
+                t: t_new,
+                y: w.y.clone(),
+                stats,
+            });
+        }
         eval(sys, t_new, &w.y, &mut w.k[..n], &mut stats)?;
         start_margin = sys.margin();
         t = t_new;
         h = h_new;
+    }
+}
+
+/// How an adaptive run ended.
+#[derive(Debug)]
+pub(crate) enum Finish {
+    /// At the end time, with the run's work.
+    Done(Stats),
+    /// Hairer's stiffness test fired: the run stopped at time `t` (s) with state
+    /// `y`, every sample up to `t` served, and the work so far in `stats`.
+    Stiff {
+        /// Time reached (s).
+        t: f64,
+        /// State there.
+        y: Vec<f64>,
+        /// Work so far.
+        stats: Stats,
+    },
+}
+
+/// Accepted steps between two of Hairer's stiffness tests while none is positive
+/// (his `NSTIFF`).
+const STIFFNESS_TEST_EVERY: u64 = 1000;
+/// Positive tests that make a run stiff (Hairer's 15).
+const STIFF_AFTER: u32 = 15;
+/// Negative tests in a row that clear the positive ones (Hairer's 6).
+const CALM_AFTER: u32 = 6;
+
+/// Hairer & Wanner's stiffness test of DOPRI5 and DOP853 (HNW II, §IV.2; the codes'
+/// `IASTI`, `NONSTI`), for any FSAL pair whose last two stages sit at `c = 1`:
+/// `ρ = ‖k_s − k_{s−1}‖ / ‖Y_s − Y_{s−1}‖` (Euclidean norms) is a difference
+/// quotient of `f` between the step's last full stage and the new solution, near
+/// the Jacobian's dominant eigenvalue when the step is held by stability, and
+/// `h ρ` above the pair's [`ExplicitTableau::stiffness_bound`] says the step is
+/// at its stability limit. The test runs on every [`STIFFNESS_TEST_EVERY`]-th
+/// accepted step and, once one was positive, on every step; it fires at the
+/// [`STIFF_AFTER`]-th positive test, and [`CALM_AFTER`] negative ones in a row
+/// start the count again.
+///
+/// It only reads the stages: a run it does not fire on is the run without it, bit
+/// for bit.
+#[derive(Debug, Clone)]
+struct StiffnessTest {
+    bound: f64,
+    /// Accepted steps so far.
+    accepted: u64,
+    /// Positive tests since the count last started.
+    positive: u32,
+    /// Negative tests in a row.
+    negative: u32,
+}
+
+impl StiffnessTest {
+    fn new(tab: &ExplicitTableau) -> Self {
+        Self {
+            bound: tab.stiffness_bound,
+            accepted: 0,
+            positive: 0,
+            negative: 0,
+        }
+    }
+
+    /// Counts an accepted step of size `h` (s) with stage slopes `k` (stage-major)
+    /// and tests it when due; true when the run is found stiff.
+    #[inline(always)]
+    fn accepted(&mut self, tab: &ExplicitTableau, h: f64, k: &[f64]) -> bool {
+        self.accepted += 1;
+        if self.positive == 0 && !self.accepted.is_multiple_of(STIFFNESS_TEST_EVERY) {
+            return false;
+        }
+        self.test(tab, h, k)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn test(&mut self, tab: &ExplicitTableau, h: f64, k: &[f64]) -> bool {
+        let h_rho = stiffness_quotient(tab, h, k);
+        if h_rho > self.bound {
+            self.negative = 0;
+            self.positive += 1;
+            self.positive >= STIFF_AFTER
+        } else {
+            self.negative += 1;
+            if self.negative >= CALM_AFTER {
+                self.positive = 0;
+            }
+            false
+        }
+    }
+}
+
+/// `h ρ` of Hairer's stiffness test for a step of size `h` (s) with stage slopes
+/// `k` (stage-major, the step's `s` stages first): `ρ = ‖k_s − k_{s−1}‖ / ‖y1 − Y_{s−1}‖`
+/// with `y1 − Y_{s−1} = h Σ_j (b_j − a_{s−1,j}) k_j`, since the FSAL stage's state
+/// is the new solution `y1 = y0 + h Σ b_j k_j` (1-based stage numbers). 0 when the
+/// two states coincide.
+fn stiffness_quotient(tab: &ExplicitTableau, h: f64, k: &[f64]) -> f64 {
+    let s = tab.stages();
+    let n = k.len() / tab.all_stages();
+    let row = tab.a[s - 2];
+    let (mut num, mut den) = (0.0, 0.0);
+    for m in 0..n {
+        let d = k[(s - 1) * n + m] - k[(s - 2) * n + m];
+        num += d * d;
+        let dy: f64 = (0..s - 1)
+            .map(|j| (tab.b[j] - row.get(j).copied().unwrap_or(0.0)) * k[j * n + m])
+            .sum();
+        den += (h * dy) * (h * dy);
+    }
+    if den > 0.0 {
+        h * (num / den).sqrt()
+    } else {
+        0.0
     }
 }
 

@@ -12,6 +12,12 @@
 //! (`tableau.rs`, checked against the order conditions); the step-size controller
 //! (`control.rs`) takes its exponent from the order of each pair's error estimate.
 //!
+//! With [`SolverSettings::stiffness_switch`] (on by default) the explicit pairs run
+//! Hairer's stiffness test as they go and hand a run found stiff over to
+//! [`Method::Sdirk4`] at the same tolerances ([`Stats::switched_at`];
+//! docs/model.md §8.7); until the test fires it only observes, so a non-stiff run is
+//! the same bits with it or without it.
+//!
 //! Every method calls the observer exactly once per requested sample time, in order,
 //! with the state at that time (never snapped to a step end), and reports
 //! [`Stats`]. A run that cannot proceed returns a [`SolveError`]; none panics or hangs.
@@ -118,14 +124,15 @@ pub enum Method {
 impl Method {
     /// The default integrator: DOP853 at [`DEFAULT_RTOL`] and [`DEFAULT_ATOL`], the
     /// cheapest setting whose worst metric error on the paper study stays under
-    /// 0.1 % (README, "What accuracy costs").
+    /// 0.1 % (docs/accuracy.md).
     pub const DEFAULT: Method = Method::Dop853 {
         rtol: DEFAULT_RTOL,
         atol: DEFAULT_ATOL,
     };
 }
 
-/// Integrator settings shared by all methods.
+/// Integrator settings shared by all methods; the default is what a study uses
+/// when its grid file names no solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
     /// The method and its accuracy setting.
@@ -138,23 +145,38 @@ pub struct SolverSettings {
     /// piecewise-smooth system ([`OdeSystem::hold_regime`]) and restart there,
     /// instead of stepping across them. On by default; other methods ignore it.
     pub locate_events: bool,
+    /// Whether the explicit adaptive pairs test for stiffness as they go (Hairer's
+    /// test on the last two stages, HNW II §IV.2) and, once it is positive, continue
+    /// the run with [`Method::Sdirk4`] at the same tolerances
+    /// ([`Stats::switched_at`]). On by default; the test only observes until it
+    /// fires, so a run it does not fire on is exactly the run without it. Other
+    /// methods ignore it.
+    pub stiffness_switch: bool,
 }
 
 impl SolverSettings {
     /// Settings for `method` with a budget of 10 million steps, no step limit, and
-    /// event location on.
+    /// event location and the switch to SDIRK4 on stiffness on.
     pub fn new(method: Method) -> Self {
         Self {
             method,
             max_steps: 10_000_000,
             max_step: f64::INFINITY,
             locate_events: true,
+            stiffness_switch: true,
         }
     }
 }
 
+impl Default for SolverSettings {
+    /// [`Method::DEFAULT`] with [`SolverSettings::new`]'s budget and event location.
+    fn default() -> Self {
+        Self::new(Method::DEFAULT)
+    }
+}
+
 /// Work counters of one integration.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Stats {
     /// Accepted steps.
     pub steps: u64,
@@ -169,6 +191,27 @@ pub struct Stats {
     /// Regime switches located and restarted at (explicit adaptive pairs with
     /// [`SolverSettings::locate_events`]); each also counts as an accepted step.
     pub events: u64,
+    /// Time (s) at which an explicit pair found the problem stiff and SDIRK4 took
+    /// over ([`SolverSettings::stiffness_switch`]); `None` when the method asked
+    /// for ran to the end. The counters above cover both methods.
+    pub switched_at: Option<f64>,
+}
+
+impl Stats {
+    /// The method that finished the run: `method`'s name (as in a grid file's
+    /// `solver.method`), or `"sdirk4"` after a switch.
+    pub fn final_method(&self, method: &Method) -> &'static str {
+        if self.switched_at.is_some() {
+            return "sdirk4";
+        }
+        match method {
+            Method::DormandPrince { .. } => "dopri5",
+            Method::Tsit5 { .. } => "tsit5",
+            Method::Dop853 { .. } => "dop853",
+            Method::Rk4 { .. } => "rk4",
+            Method::Sdirk4 { .. } => "sdirk4",
+        }
+    }
 }
 
 /// Why an integration stopped early.
@@ -295,8 +338,24 @@ where
         Method::Rk4 { step } => return explicit::rk4(sys, &problem, step, &mut samples),
         Method::Sdirk4 { rtol, atol } => {
             let tol = control::Tolerance { rtol, atol };
-            return sdirk::sdirk4(sys, &problem, tol, &mut samples);
+            return sdirk::sdirk4(sys, &problem, tol, &mut samples, Stats::default());
         }
     };
-    explicit::adaptive(sys, tableau, &problem, tol, &mut samples)
+    let stiffness = settings.stiffness_switch;
+    match explicit::adaptive(sys, tableau, &problem, tol, stiffness, &mut samples)? {
+        explicit::Finish::Done(stats) => Ok(stats),
+        explicit::Finish::Stiff { t, y, stats } => {
+            // The rest of the run on SDIRK4, at the same tolerances, with the natural
+            // law (it steps across switches) and the work so far in its counters.
+            sys.release_regime();
+            let rest = eval::Problem {
+                t0: t,
+                y0: &y,
+                ..problem
+            };
+            let mut stats = sdirk::sdirk4(sys, &rest, tol, &mut samples, stats)?;
+            stats.switched_at = Some(t);
+            Ok(stats)
+        }
+    }
 }

@@ -243,11 +243,16 @@ fn solve_stages<S: OdeSystem>(
 /// `0.9 · err^{−1/4}` clamped to [0.2, 10]; Newton failures halve the step (and
 /// refresh the Jacobian if it is not current), non-finite stages cut it by 10.
 /// Sample times inside a step get the cubic Hermite interpolant.
+///
+/// `stats` holds the work done before `p.t0` (zero for a run of its own; an explicit
+/// pair's when SDIRK4 takes over a run it found stiff): the counters go on from
+/// there, and the step budget counts them.
 pub(crate) fn sdirk4<S, O>(
     sys: &mut S,
     p: &Problem<'_>,
     tol: Tolerance,
     samples: &mut Samples<'_, O>,
+    stats: Stats,
 ) -> Result<Stats, SolveError>
 where
     S: OdeSystem,
@@ -257,7 +262,7 @@ where
     let s = tab.stages();
     let mut w = Workspace::new(p.y0, s);
     let n = w.n;
-    let mut stats = Stats::default();
+    let mut stats = stats;
     samples.serve_start(sys, p.t0, p.y0)?;
     eval(sys, p.t0, p.y0, &mut w.f_cur, &mut stats)?;
     let mut h = initial_step(

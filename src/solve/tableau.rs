@@ -31,6 +31,11 @@ pub(crate) struct ExplicitTableau {
     /// 0.04 for the 5(4) pairs ([`super::control::PI_BETA`]), 0 (a plain controller)
     /// where that is what the pair's own code uses.
     pub pi_beta: f64,
+    /// Threshold of Hairer's stiffness test on `h ρ` (dimensionless), `ρ` the
+    /// difference quotient of the last two stages, both at `c = 1` (HNW II,
+    /// §IV.2, and the codes DOPRI5 and DOP853): a little inside the method's
+    /// stability interval on the negative real axis. 0 for a pair without the test.
+    pub stiffness_bound: f64,
     /// First-same-as-last: the last stage is evaluated at the new solution
     /// (its row of `a` equals `b`), so its slope is the next step's first stage.
     pub fsal: bool,
@@ -83,6 +88,7 @@ pub(crate) const RK4: ExplicitTableau = ExplicitTableau {
     order: 4,
     error_order: 0,
     pi_beta: 0.0,
+    stiffness_bound: 0.0,
     fsal: false,
     dense: None,
 };
@@ -130,6 +136,8 @@ pub(crate) const DORMAND_PRINCE: ExplicitTableau = ExplicitTableau {
     order: 5,
     error_order: 4,
     pi_beta: super::control::PI_BETA,
+    // Hairer's DOPRI5 (its stability interval on the negative real axis ends at −3.3066).
+    stiffness_bound: 3.25,
     fsal: true,
     dense: Some(DenseOutput {
         c: &[],
@@ -227,6 +235,9 @@ pub(crate) const TSITOURAS5: ExplicitTableau = ExplicitTableau {
             2.5,
         ]],
     }),
+    // Hairer's test at DOPRI5's 98.3 % of the stability interval, which for Tsit5
+    // ends at −3.5068.
+    stiffness_bound: 3.45,
     // A 5(4) FSAL pair with one plain estimate, like DOPRI5: order, error order,
     // PI gain, FSAL and the empty `b_hat_low` are DOPRI5's.
     ..DORMAND_PRINCE
@@ -392,6 +403,8 @@ pub(crate) const DOP853: ExplicitTableau = ExplicitTableau {
     order: 8,
     error_order: 7,
     pi_beta: 0.0,
+    // Hairer's DOP853 (its stability interval on the negative real axis ends at −6.3937).
+    stiffness_bound: 6.1,
     fsal: true,
     dense: Some(DenseOutput {
         c: &[0.1, 0.2, 0.777777777777777777777777777778],
@@ -915,6 +928,64 @@ mod tests {
         let b3 = padded(t.b_hat_low.iter().copied(), all);
         assert!(max_violation(&a, &b3, 3, 1.0) < 1e-13);
         assert!(max_violation(&a, &b3, 4, 1.0) > 1e-8);
+    }
+
+    /// Where the stability interval of `t` on the negative real axis ends: the
+    /// first `x > 0` (scanned in steps of 1e-4, then bisected) with
+    /// `|R(−x)| > 1`, `R(z) = 1 + z bᵀ(I − zA)⁻¹ 1` for the explicit `A`.
+    fn real_stability_boundary(t: &ExplicitTableau) -> f64 {
+        let a = square(t.a);
+        let r = |z: f64| {
+            let mut u = vec![0.0; a.len()];
+            for i in 0..a.len() {
+                u[i] = 1.0 + z * (0..i).map(|j| a[i][j] * u[j]).sum::<f64>();
+            }
+            1.0 + z * t.b.iter().zip(&u).map(|(b, u)| b * u).sum::<f64>()
+        };
+        let unstable = |x: f64| r(-x).abs() > 1.0;
+        let mut x = 1e-4;
+        while !unstable(x) {
+            x += 1e-4;
+        }
+        let (mut lo, mut hi) = (x - 1e-4, x);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if unstable(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        lo
+    }
+
+    /// Hairer's stiffness test compares the last two stages, which must both sit
+    /// at `c = 1` (the step's last full stage and the FSAL stage at the new
+    /// solution), against a bound a little inside the stability interval on the
+    /// negative real axis (Hairer's 3.25 for DOPRI5, whose interval ends at −3.3066,
+    /// and 6.1 for DOP853, at −6.3937; Tsit5, at −3.5068, takes 3.45, DOPRI5's
+    /// 98.3 %).
+    #[test]
+    fn stiffness_bounds_sit_inside_the_stability_intervals() {
+        for (name, t) in [
+            ("dopri5", &DORMAND_PRINCE),
+            ("tsit5", &TSITOURAS5),
+            ("dop853", &DOP853),
+        ] {
+            let s = t.stages();
+            assert_eq!((t.c[s - 2], t.c[s - 1]), (1.0, 1.0), "{name}");
+            let boundary = real_stability_boundary(t);
+            let ratio = t.stiffness_bound / boundary;
+            println!(
+                "{name}: stability interval to -{boundary:.4}, bound {} ({ratio:.4})",
+                t.stiffness_bound
+            );
+            assert!(
+                (0.95..0.99).contains(&ratio),
+                "{name}: bound {} vs interval {boundary}",
+                t.stiffness_bound
+            );
+        }
     }
 
     #[test]

@@ -18,7 +18,7 @@ pub enum Dimension {
     Length,
     /// Crank speed, stored in rev/min.
     Speed,
-    /// Hertz contact stiffness, SI unit N/m^1.5.
+    /// Hertz contact stiffness, SI unit N/m^(3/2) (N m^-1.5).
     Stiffness,
     /// Viscous damping, SI unit N s/m.
     Damping,
@@ -63,10 +63,13 @@ impl Dimension {
                 ("Hz", X(60.0)),
                 ("rad/s", X(60.0 / (2.0 * PI))),
             ],
+            // The first is what files say: UDUNITS has no fractional powers and reads
+            // every spelling it accepts (`N m-1.5` as 0.5 kg s-2) as another quantity;
+            // this one it rejects, and pint (also with cf_xarray's syntax) reads it right.
             Dimension::Stiffness => &[
+                ("N/m^(3/2)", P(0)),
                 ("N m-1.5", P(0)),
                 ("N/m^1.5", P(0)),
-                ("N/m^(3/2)", P(0)),
                 ("N m^-1.5", P(0)),
             ],
             Dimension::Damping => &[
@@ -170,6 +173,8 @@ mod tests {
         assert_eq!(Speed.parse("300 rpm").unwrap(), 300.0);
         assert_eq!(Speed.parse("5 Hz").unwrap(), 300.0);
         assert_eq!(Stiffness.parse("9.57e9 N/m^1.5").unwrap(), 9.57e9);
+        assert_eq!(Stiffness.parse("9.57e9 N m-1.5").unwrap(), 9.57e9);
+        assert_eq!(Stiffness.base_unit(), "N/m^(3/2)");
         assert_eq!(Time.parse("20 us").unwrap(), 20e-6);
         assert_eq!(Frequency.parse("50 kHz").unwrap(), 50e3);
         assert_eq!(Length.parse("1e-3").unwrap(), 1e-3);

@@ -1,30 +1,121 @@
-//! Helpers shared by `tests/hard_cases.rs` and `tests/properties.rs` (each includes
-//! this file with `#[path = "common/hard.rs"] mod hard;`): one instrumented run of a
-//! slider-crank case with the energy ledger on, and the checks every hard case makes
-//! (finite outputs, eccentricity within physical bounds, docs/model.md §4.4's energy
-//! balance, constraint residuals).
+//! Helpers shared by `tests/hard_cases.rs`, `tests/properties.rs` and
+//! `tests/stiff_cases.rs`: one instrumented run of a slider-crank case with the energy
+//! ledger on, on either model ([`Model`]: the Cartesian reference or the production
+//! minimal-coordinate model), and the checks every hard case makes (finite outputs,
+//! eccentricity within physical bounds, docs/model.md §4.4's energy balance,
+//! constraint residuals).
 #![allow(dead_code)]
 
 use std::f64::consts::PI;
+use std::fmt;
 use std::time::Instant;
 
 use studyrun::bearing::{BearingParams, DampingModel, RaceWaviness};
 use studyrun::error::ModelError;
-use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, Sample};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, Sample, SliderCrank};
 use studyrun::multibody::{ForceElement, Ledger};
 use studyrun::solve::{integrate, Method, OdeSystem, SolveError, SolverSettings, Stats};
 
-/// The slider-crank with a record of the integrator's accepted steps: their end
-/// times, and the longest run of right-hand-side evaluations between two accepted
-/// steps (which counts the attempts of rejected steps in between).
-pub struct Probe {
-    pub mech: CartesianSliderCrank,
+/// Which formulation of the slider-crank a hard case runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Model {
+    /// `CartesianSliderCrank`: the general multibody core (docs/model.md §4), which
+    /// steps across contact switches.
+    Reference,
+    /// `SliderCrank`: the minimal-coordinate model every study runs (§3), with the
+    /// contact switches located (`locate_events`, on by default) and its own ledger
+    /// (§3.8).
+    Production,
+}
+
+/// Both models, reference first.
+pub const MODELS: [Model; 2] = [Model::Reference, Model::Production];
+
+impl fmt::Display for Model {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Model::Reference => "reference",
+            Model::Production => "production",
+        })
+    }
+}
+
+/// A model with its energy ledger on that can record a sample.
+pub trait Instrumented: OdeSystem {
+    /// The outputs, energies, ledger and constraint residuals at `(t, y)`.
+    fn record(&mut self, t: f64, y: &[f64]) -> Result<Record, ModelError>;
+}
+
+impl Instrumented for CartesianSliderCrank {
+    fn record(&mut self, t: f64, y: &[f64]) -> Result<Record, ModelError> {
+        let sample = self.sample(t, y)?;
+        let s = self.system_mut();
+        let (kinetic, potential, ledger) = (s.kinetic_energy(), s.potential_energy(t), s.ledger(y));
+        let contact_potential = s
+            .elements()
+            .iter()
+            .map(|e| e.energy(t, s.q(), s.qd()).potential)
+            .sum();
+        let position_residual = s.position_residual(t);
+        let velocity_residual = s.velocity_residual(t);
+        Ok(Record {
+            t,
+            sample,
+            kinetic,
+            potential,
+            contact_potential,
+            ledger,
+            position_residual,
+            velocity_residual,
+        })
+    }
+}
+
+/// The constraints hold by construction: the residuals are 0.
+impl Instrumented for SliderCrank {
+    fn record(&mut self, t: f64, y: &[f64]) -> Result<Record, ModelError> {
+        let sample = self.sample(t, y)?;
+        let energy = self.energy(t, y)?;
+        Ok(Record {
+            t,
+            sample,
+            kinetic: energy.kinetic,
+            potential: energy.potential,
+            contact_potential: energy.contact_potential,
+            ledger: self.ledger(y),
+            position_residual: 0.0,
+            velocity_residual: 0.0,
+        })
+    }
+}
+
+/// A model with a record of the integrator's accepted steps: their end times,
+/// whether each ended at a located switch, and the longest run of right-hand-side
+/// evaluations between two accepted steps (which counts the attempts of rejected
+/// steps in between; on the production model also the evaluations that locate a
+/// switch, and not the step that recomputes the state there).
+pub struct Probe<M> {
+    pub mech: M,
     pub accepted: Vec<f64>,
+    /// Per accepted step: it ended at a located switch.
+    pub at_switch: Vec<bool>,
     evals_since_accept: u64,
     pub max_evals_between_accepts: u64,
 }
 
-impl OdeSystem for Probe {
+impl<M> Probe<M> {
+    pub fn new(mech: M) -> Self {
+        Self {
+            mech,
+            accepted: Vec::new(),
+            at_switch: Vec::new(),
+            evals_since_accept: 0,
+            max_evals_between_accepts: 0,
+        }
+    }
+}
+
+impl<M: OdeSystem> OdeSystem for Probe<M> {
     fn dim(&self) -> usize {
         self.mech.dim()
     }
@@ -37,7 +128,24 @@ impl OdeSystem for Probe {
             self.max_evals_between_accepts.max(self.evals_since_accept);
         self.evals_since_accept = 0;
         self.accepted.push(t);
+        self.at_switch.push(false);
         self.mech.accept_step(t, y)
+    }
+    fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
+        // After the first, each new regime is a restart at a located switch, where
+        // the step just accepted ended; the step that recomputes the state there
+        // ran since.
+        if let Some(last) = self.at_switch.last_mut() {
+            *last = true;
+        }
+        self.evals_since_accept = 0;
+        self.mech.hold_regime(t, y)
+    }
+    fn release_regime(&mut self) {
+        self.mech.release_regime()
+    }
+    fn margin(&self) -> f64 {
+        self.mech.margin()
     }
 }
 
@@ -56,20 +164,23 @@ pub struct Record {
     pub contact_potential: f64,
     /// The energy ledger's quadratures.
     pub ledger: Ledger,
-    /// Max-norm of `Φ(q, t)` (m or rad).
+    /// Max-norm of `Φ(q, t)` (m or rad); 0 on the production model.
     pub position_residual: f64,
-    /// Max-norm of `Φq q̇ + Φt` (m/s or rad/s).
+    /// Max-norm of `Φq q̇ + Φt` (m/s or rad/s); 0 on the production model.
     pub velocity_residual: f64,
 }
 
 /// One finished run.
 pub struct Run {
+    pub model: Model,
     pub records: Vec<Record>,
     pub stats: Stats,
     /// Wall-clock time of the integration (s).
     pub wall: f64,
     /// End times of the accepted steps (s).
     pub accepted: Vec<f64>,
+    /// Per accepted step: it ended at a located switch (production model only).
+    pub at_switch: Vec<bool>,
     /// Longest run of RHS evaluations between two accepted steps.
     pub max_evals_between_accepts: u64,
 }
@@ -79,54 +190,64 @@ pub fn uniform_times(duration: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|k| duration * k as f64 / n as f64).collect()
 }
 
-/// Integrates `case` with the energy ledger on and records every sample.
+/// Integrates `mech` (ledger on) from its initial state `y0` and records every sample.
+fn run_instrumented<M: Instrumented>(
+    model: Model,
+    mech: M,
+    y0: Vec<f64>,
+    settings: &SolverSettings,
+    times: &[f64],
+) -> Result<Run, SolveError> {
+    let mut probe = Probe::new(mech);
+    let mut records = Vec::with_capacity(times.len());
+    let start = Instant::now();
+    let stats = integrate(&mut probe, settings, 0.0, &y0, times, |p, t, y| {
+        records.push(p.mech.record(t, y)?);
+        Ok(())
+    })?;
+    Ok(Run {
+        model,
+        records,
+        stats,
+        wall: start.elapsed().as_secs_f64(),
+        accepted: probe.accepted,
+        at_switch: probe.at_switch,
+        max_evals_between_accepts: probe.max_evals_between_accepts,
+    })
+}
+
+/// Integrates `case` on `model` with the energy ledger on and records every sample.
+pub fn run_model(
+    model: Model,
+    case: &CaseParams,
+    settings: &SolverSettings,
+    times: &[f64],
+) -> Result<Run, SolveError> {
+    match model {
+        Model::Reference => {
+            let mut mech = CartesianSliderCrank::new(case)
+                .expect("valid case")
+                .with_energy_ledger(true);
+            let y0 = mech.initial_state();
+            run_instrumented(model, mech, y0, settings, times)
+        }
+        Model::Production => {
+            let mech = SliderCrank::new(case)
+                .expect("valid case")
+                .with_energy_ledger(true);
+            let y0 = mech.initial_state();
+            run_instrumented(model, mech, y0, settings, times)
+        }
+    }
+}
+
+/// Integrates `case` on the reference model with the energy ledger on.
 pub fn run_case(
     case: &CaseParams,
     settings: &SolverSettings,
     times: &[f64],
 ) -> Result<Run, SolveError> {
-    let mech = CartesianSliderCrank::new(case)
-        .expect("valid case")
-        .with_energy_ledger(true);
-    let mut probe = Probe {
-        mech,
-        accepted: Vec::new(),
-        evals_since_accept: 0,
-        max_evals_between_accepts: 0,
-    };
-    let y0 = probe.mech.initial_state();
-    let mut records = Vec::with_capacity(times.len());
-    let start = Instant::now();
-    let stats = integrate(&mut probe, settings, 0.0, &y0, times, |p, t, y| {
-        let sample = p.mech.sample(t, y)?;
-        let s = p.mech.system_mut();
-        let (kinetic, potential, ledger) = (s.kinetic_energy(), s.potential_energy(t), s.ledger(y));
-        let contact_potential = s
-            .elements()
-            .iter()
-            .map(|e| e.energy(t, s.q(), s.qd()).potential)
-            .sum();
-        let position_residual = s.position_residual(t);
-        let velocity_residual = s.velocity_residual(t);
-        records.push(Record {
-            t,
-            sample,
-            kinetic,
-            potential,
-            contact_potential,
-            ledger,
-            position_residual,
-            velocity_residual,
-        });
-        Ok(())
-    })?;
-    Ok(Run {
-        records,
-        stats,
-        wall: start.elapsed().as_secs_f64(),
-        accepted: probe.accepted,
-        max_evals_between_accepts: probe.max_evals_between_accepts,
-    })
+    run_model(Model::Reference, case, settings, times)
 }
 
 /// Σ |offset| + Σ amplitudes of one race (m): the largest height its waviness reaches.
@@ -390,9 +511,10 @@ pub fn check_run(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Ch
 /// Prints one line of what a run measured.
 pub fn report(name: &str, run: &Run, c: &Checks) {
     println!(
-        "{name}: {} steps, {} rejected, {} RHS, {:.2} s | energy {:.2e} J / {:.3e} J = {:.2e} (dissipated {:.3e} J) | \
+        "{name} [{}]: {} steps, {} rejected, {} RHS, {:.2} s | energy {:.2e} J / {:.3e} J = {:.2e} (dissipated {:.3e} J) | \
          |e|max {:.2} µm, |e|/bound energy {:.3} force {:.3} run-max {:.3} plain {:.3} | |F|max {:.1} N | balls {}..{} | \
          residuals max {:.1e} m {:.1e} m/s, end {:.1e} m {:.1e} m/s",
+        run.model,
         run.stats.steps,
         run.stats.rejected,
         run.stats.rhs_evals,

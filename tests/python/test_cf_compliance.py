@@ -1,0 +1,111 @@
+"""The study file passes IOOS compliance-checker's CF-1.8 suite (`compliance-checker
+--test cf:1.8`): no high- or medium-priority failure (the command line's "Errors" and
+"Warnings"), with two documented exceptions:
+
+* the stiffness (N m^(-3/2)) has units UDUNITS rejects: no UDUNITS string means a
+  half-integer power of length, and one it accepts would be a wrong quantity
+  (test_units.py), so "not recognized by UDUNITS" is allowed for the variables whose
+  quantity UDUNITS cannot express (cf_quantities.QUANTITIES), and only for them;
+* SKIPPED_CHECKS: checker heuristics that are not CF rules (see there).
+
+The file is checked through a link named `*.nc` (the checker wants that suffix, §2.1).
+
+Environment: STUDYRUN_SMOKE_FILE (the result of `studyrun studies/smoke.yaml`) and,
+optional, STUDYRUN_MERGED_FILE (`studyrun merge` of its shards); unset: skip.
+"""
+
+import os
+import re
+
+import h5py
+import numpy as np
+import pytest
+
+from cf_quantities import QUANTITIES, quantity_of, units_attribute
+
+FILES = ("STUDYRUN_SMOKE_FILE", "STUDYRUN_MERGED_FILE")
+
+SKIPPED_CHECKS = [
+    # §5.1 as compliance-checker 6.x implements it: a dimension *named* `time` must have
+    # a coordinate with standard_name `time`, which in turn needs units "s since <date>"
+    # (§4.4). studyrun's `time` is seconds from the start of the simulation, kept as plain
+    # float seconds; CF §5.1 states no such rule (ioos/compliance-checker#1245, PR #1353).
+    "check_spatiotemporal_dims_have_coordinate_vars",
+]
+
+# CF-1.8 §2.2 numeric types (compliance-checker's cf:1.8 list): no 64-bit or unsigned integers.
+CF18_INTEGERS = (np.int8, np.int16, np.int32)
+IDS = ("case", "reference", "reference_index")
+
+
+@pytest.fixture(scope="module", params=FILES)
+def path(request):
+    value = os.environ.get(request.param)
+    if not value:
+        pytest.skip(f"{request.param} is not set")
+    assert os.path.isfile(value), f"{request.param}={value} does not exist"
+    return os.path.abspath(value)
+
+
+def failed(result):
+    value = result.value
+    if isinstance(value, tuple):
+        return value[0] < value[1]
+    return not value
+
+
+def allowed(message, path):
+    """A §3.1 "not recognized by UDUNITS" for a quantity UDUNITS cannot express."""
+    m = re.fullmatch(r'units for (\w+), "(.*)" are not recognized by UDUNITS', message)
+    if not m:
+        return False
+    name, units = m.groups()
+    with h5py.File(path, "r") as f:
+        assert units_attribute(f[name].attrs["units"]) == units
+    q = quantity_of(name)
+    return q is not None and QUANTITIES[q][0] is None
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # the checker's own ioos_sos plugin
+def test_cf18_compliance(path, tmp_path):
+    runner = pytest.importorskip("compliance_checker.runner")
+    from compliance_checker.base import BaseCheck
+
+    link = tmp_path / "study.nc"
+    link.symlink_to(path)
+    suite = runner.CheckSuite()
+    suite.load_all_available_checkers()
+    dataset = suite.load_dataset(str(link))
+    results, exceptions = suite.run_all(dataset, ["cf:1.8"], skip_checks=SKIPPED_CHECKS)["cf:1.8"]
+    assert not exceptions, f"checks that crashed: {exceptions}"
+    problems = []
+    for r in results:
+        if r.weight < BaseCheck.MEDIUM or not failed(r):
+            continue
+        messages = [m for m in r.msgs if not allowed(m, path)]
+        if messages or not r.msgs:
+            level = "error" if r.weight >= BaseCheck.HIGH else "warning"
+            problems.append(f"{level} {r.name}: {messages or r.msgs}")
+    assert not problems, "\n".join(problems)
+
+
+def test_ids_are_cf18_signed_integers(path):
+    with h5py.File(path, "r") as f:
+        for name in IDS:
+            assert f[name].dtype.type in CF18_INTEGERS, (name, f[name].dtype)
+        case = f["case"][:]
+        assert len(np.unique(case)) == len(case) and (case >= 0).all()
+        assert (f["reference_index"][:] < f["reference"].shape[0]).all()
+
+
+def test_history_records_the_run(path):
+    """CF §2.6.2 `history`: one line per program that made or changed the file."""
+    with h5py.File(path, "r") as f:
+        assert "history" in f.attrs, "no history attribute"
+        history = units_attribute(f.attrs["history"])
+    lines = [line for line in history.splitlines() if line.strip()]
+    assert lines, "history is empty"
+    assert any("studyrun" in line for line in lines), history
+    merged = os.environ.get("STUDYRUN_MERGED_FILE")
+    if merged and os.path.abspath(merged) == path:
+        assert any("studyrun merge" in line for line in lines), history
