@@ -186,22 +186,22 @@ fn ten_million_cases_are_refused_before_they_are_expanded() {
 
 #[test]
 fn distinct_references_are_found_by_hashing_not_by_comparing_every_pair() {
-    // 50 000 speeds: 50 000 ideal references. Comparing each case with every
-    // reference found so far took 1.25e9 comparisons.
+    // 200 000 speeds: 200 000 ideal references. Comparing each case with every
+    // reference found so far (2e10 comparisons) took 90 s; hashing takes 1 s.
     let dir = tempfile::tempdir().unwrap();
-    let speeds: Vec<String> = (0..50_000).map(|k| format!("{}", 300 + k)).collect();
+    let speeds: Vec<String> = (0..200_000).map(|k| format!("{}", 300 + k)).collect();
     write(
         dir.path(),
         "speeds.yaml",
         &format!(
-            "name: s\nduration: 0.01\nsample_rate: 1000\ntransient: 0\nmax_cases: 50000\ngrid:\n  rpm: [{}]\n",
+            "name: s\nduration: 0.01\nsample_rate: 1000\ntransient: 0\nmax_cases: 200000\ngrid:\n  rpm: [{}]\n",
             speeds.join(", ")
         ),
     );
     let (out, took) = timed(dir.path(), &["validate", "speeds.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("50000 cases (50000 ideal references)"));
-    assert!(took < FAST, "took {took:?}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("200000 cases (200000 ideal references)"));
+    assert!(took < Duration::from_secs(20), "took {took:?}");
 }
 
 #[test]
