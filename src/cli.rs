@@ -1,15 +1,18 @@
 //! The command line: builds the clap command and dispatches to the library.
 
+use std::fmt;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 use studyrun::numeric::simd::Isa;
 use studyrun::output;
 use studyrun::run::{self, RunOptions};
 use studyrun::simulate::{simulate, Sampling, CHANNELS};
+use studyrun::study::memory::{self, Limits};
 use studyrun::study::params::lookup;
 use studyrun::study::Shard;
 use studyrun::study::{Study, StudyError};
@@ -22,6 +25,46 @@ const EXIT_ERROR: u8 = 1;
 const EXIT_INVALID: u8 = 2;
 /// Exit code: the study finished and its file is complete, but some cases failed.
 const EXIT_CASES_FAILED: u8 = 3;
+
+/// Writes a line to stderr, ignoring failure (a full disk or closed stderr must not
+/// turn a message into a panic).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
+/// Writes to stdout; a failure becomes an error of the command ([`StdoutClosed`] for
+/// a reader that went away, e.g. `| head`).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        write_stdout(format_args!($($arg)*))
+    };
+}
+
+/// Stdout is a pipe whose reader has gone: stop quietly.
+#[derive(Debug)]
+struct StdoutClosed;
+
+impl fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("standard output closed")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+fn write_stdout(args: fmt::Arguments<'_>) -> Result<()> {
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_fmt(args)
+        .and_then(|()| stdout.write_all(b"\n"))
+    {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(StdoutClosed.into()),
+        Err(e) => Err(anyhow::Error::new(e).context("cannot write to standard output")),
+    }
+}
 
 const EXAMPLES: &str = "\
 Examples:
@@ -58,10 +101,16 @@ struct Cli {
 enum Command {
     /// Run a study (the default command).
     Run(RunArgs),
-    /// Check a grid file and print its cases' count; runs nothing.
+    /// Check a grid file and print its cases' count and memory estimate; runs nothing.
     Validate {
         /// The grid file (YAML).
         grid: PathBuf,
+        /// Worker threads the memory estimate is made for [default: all cores].
+        #[arg(short, long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
+        /// Largest memory a run may need, e.g. 40GiB [default: half the memory].
+        #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+        memory_limit: Option<u64>,
     },
     /// Summarise a result file: grid, status counts, failed cases with their errors.
     Inspect {
@@ -77,12 +126,15 @@ enum Command {
         /// Result file [default: <grid name>_accuracy.h5].
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// Worker threads [default: all cores].
-        #[arg(short, long)]
-        jobs: Option<usize>,
-        /// Overwrite OUTPUT if it exists.
+        /// Worker threads [default: all cores; at most 4 per core].
+        #[arg(short, long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
+        /// Overwrite OUTPUT if it exists (only a studyrun result file).
         #[arg(long)]
         force: bool,
+        /// Largest memory the grid's run may need, e.g. 40GiB [default: half the memory].
+        #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+        memory_limit: Option<u64>,
         /// Only these integrators of the ladder, comma-separated [default: all].
         #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(studyrun::accuracy::METHOD_NAMES))]
         methods: Vec<String>,
@@ -99,7 +151,7 @@ enum Command {
         /// The shard files (any order).
         #[arg(required = true)]
         shards: Vec<PathBuf>,
-        /// Overwrite OUTPUT if it exists.
+        /// Overwrite OUTPUT if it exists (only a studyrun result file).
         #[arg(long)]
         force: bool,
     },
@@ -113,21 +165,27 @@ struct RunArgs {
     /// Result file [default: <grid name>.h5 in the current directory].
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Worker threads [default: all cores].
-    #[arg(short, long)]
-    jobs: Option<usize>,
+    /// Worker threads [default: all cores; at most 4 per core].
+    #[arg(short, long, value_parser = clap::value_parser!(u64).range(1..))]
+    jobs: Option<u64>,
     /// Continue an interrupted run from its journal (OUTPUT.journal).
     #[arg(long, conflicts_with = "force")]
     resume: bool,
-    /// Overwrite an existing result file and discard any journal.
+    /// Overwrite an existing result file (only a studyrun result file) and discard any
+    /// journal.
     #[arg(long)]
     force: bool,
     /// Run only shard K of N (cases whose id % N == K - 1).
     #[arg(long, value_name = "K/N")]
     shard: Option<Shard>,
-    /// Print the case table and the estimated size and time; run nothing.
+    /// Print the case table, the memory estimate and the estimated size and time; run
+    /// nothing.
     #[arg(long)]
     dry_run: bool,
+    /// Largest memory the run may need, e.g. 40GiB or 512MiB; a study whose estimate
+    /// is larger is refused before anything runs [default: half the memory].
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    memory_limit: Option<u64>,
     /// Exit 0 (not 3) when the study finished and some cases failed: they are
     /// recorded in the file. For job scripts whose next step depends on success.
     #[arg(long)]
@@ -145,58 +203,61 @@ struct RunArgs {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(e) = Isa::requested() {
-        eprintln!("studyrun: error: {e}");
+        say!("studyrun: error: {e}");
         return ExitCode::from(EXIT_INVALID);
     }
     let outcome = match cli.command {
         Some(Command::Run(args)) => run_command(args),
         None => run_command(cli.run),
-        Some(Command::Validate { grid }) => load(&grid).map(|study| {
-            println!(
-                "{}: ok, {} cases ({} ideal references), axes: {}",
-                grid.display(),
-                study.cases.len(),
-                study.references.len(),
-                study.axes.join(", ")
-            );
-            EXIT_OK
-        }),
-        Some(Command::Inspect { file }) => output::inspect(&file).map(|text| {
-            print!("{text}");
-            EXIT_OK
+        Some(Command::Validate {
+            grid,
+            jobs,
+            memory_limit,
+        }) => validate_command(&grid, jobs, memory_limit),
+        Some(Command::Inspect { file }) => output::inspect(&file).and_then(|text| {
+            out!("{}", text.trim_end_matches('\n'))?;
+            Ok(EXIT_OK)
         }),
         Some(Command::Accuracy {
             grid,
             output,
             jobs,
             force,
+            memory_limit,
             methods,
             rtols,
-        }) => accuracy_command(&grid, output, jobs, force, (&methods, &rtols)),
+        }) => accuracy_command(
+            &grid,
+            output,
+            limits(jobs, memory_limit),
+            force,
+            (&methods, &rtols),
+        ),
         Some(Command::Merge {
             output,
             shards,
             force,
         }) => output::merge(&output, &shards, force)
             .map_err(anyhow::Error::from)
-            .map(|n| {
-                println!(
+            .and_then(|n| {
+                out!(
                     "merged {} shard files into {} ({n} cases)",
                     shards.len(),
                     output.display()
-                );
-                EXIT_OK
+                )?;
+                Ok(EXIT_OK)
             }),
     };
     match outcome {
         Ok(code) => ExitCode::from(code),
+        Err(e) if e.downcast_ref::<StdoutClosed>().is_some() => ExitCode::from(EXIT_OK),
         Err(e) => {
             let code = if e.downcast_ref::<StudyError>().is_some() {
                 EXIT_INVALID
             } else {
                 EXIT_ERROR
             };
-            eprintln!("studyrun: error: {}", describe(&e));
+            say!("studyrun: error: {}", describe(&e));
             ExitCode::from(code)
         }
     }
@@ -216,22 +277,67 @@ fn describe(e: &anyhow::Error) -> String {
     text
 }
 
-fn load(grid: &Path) -> Result<Study> {
-    Ok(Study::load(grid)?)
+/// One `--memory-limit` value.
+fn parse_size(text: &str) -> Result<u64, String> {
+    memory::parse_size(text)
+}
+
+/// The worker threads to run: `requested` (at least 1), or all cores; more than
+/// [`memory::max_jobs`] (4 per core, at most 1024) only adds threads that wait, so
+/// such a request is lowered with a warning.
+fn jobs(requested: Option<u64>) -> usize {
+    let max = memory::max_jobs();
+    match requested {
+        None => memory::available_cores(),
+        Some(j) if j as u128 > max as u128 => {
+            say!(
+                "studyrun: warning: -j {j} is more than 4 workers per available core ({} cores) \
+                 or {}; using -j {max}",
+                memory::available_cores(),
+                memory::MAX_JOBS
+            );
+            max
+        }
+        Some(j) => j.max(1) as usize,
+    }
+}
+
+/// The limits a grid is validated under: the workers and the memory limit.
+fn limits(jobs_requested: Option<u64>, memory_limit: Option<u64>) -> Limits {
+    Limits::new(memory_limit, Some(jobs(jobs_requested)))
+}
+
+fn load(grid: &Path, limits: &Limits) -> Result<Study> {
+    Ok(Study::load_with(grid, limits)?)
+}
+
+fn validate_command(grid: &Path, jobs: Option<u64>, memory_limit: Option<u64>) -> Result<u8> {
+    let limits = limits(jobs, memory_limit);
+    let study = load(grid, &limits)?;
+    let estimate = study.memory_estimate(limits.jobs);
+    out!(
+        "{}: ok, {} cases ({} ideal references), axes: {}; memory about {} on {} workers (limit {})",
+        grid.display(),
+        study.cases.len(),
+        study.references.len(),
+        study.axes.join(", "),
+        memory::bytes(estimate.total),
+        limits.jobs,
+        memory::bytes(limits.memory as f64)
+    )?;
+    Ok(EXIT_OK)
 }
 
 fn run_command(args: RunArgs) -> Result<u8> {
     let grid = args.grid.expect("clap requires the grid");
-    let study = load(&grid)?;
+    let limits = limits(args.jobs, args.memory_limit);
+    let study = load(&grid, &limits)?;
     let output = args
         .output
         .unwrap_or_else(|| PathBuf::from(format!("{}.h5", study.name)));
-    let jobs = args
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    let jobs = limits.jobs;
     if args.dry_run {
-        dry_run(&study, args.shard, jobs)?;
+        dry_run(&study, args.shard, &limits)?;
         return Ok(EXIT_OK);
     }
     let opts = RunOptions {
@@ -244,7 +350,7 @@ fn run_command(args: RunArgs) -> Result<u8> {
     };
     let summary = run::run(&study, &opts)?;
     if summary.complete_before {
-        eprintln!(
+        say!(
             "studyrun: {} already holds this study's complete result ({} cases: {} ok, {} failed); nothing to do",
             output.display(),
             summary.cases,
@@ -258,10 +364,10 @@ fn run_command(args: RunArgs) -> Result<u8> {
         });
     }
     if args.timings {
-        eprintln!("{}", summary.stats);
+        say!("{}", summary.stats);
     }
     if !args.quiet {
-        eprintln!(
+        say!(
             "studyrun: {} cases into {} in {:.2} s ({} ok, {} failed{})",
             summary.cases,
             output.display(),
@@ -276,7 +382,7 @@ fn run_command(args: RunArgs) -> Result<u8> {
         );
     }
     if summary.rerun > 0 {
-        eprintln!(
+        say!(
             "studyrun: warning: {} cases of the journal were run again: their data were not \
              found intact in the partial file",
             summary.rerun
@@ -289,15 +395,44 @@ fn run_command(args: RunArgs) -> Result<u8> {
     })
 }
 
-/// The case table, the file size and a time estimate from a short calibration run.
-fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
+/// Cases the dry run's time estimate is calibrated on: up to [`CALIBRATION_CASES`]
+/// spread evenly over `rows`, bearing cases only when there are any (an ideal case
+/// costs next to nothing and would make the estimate far too low).
+const CALIBRATION_CASES: usize = 5;
+
+fn calibration_rows(study: &Study, rows: &[usize]) -> Vec<usize> {
+    let bearing: Vec<usize> = rows
+        .iter()
+        .copied()
+        .filter(|&r| study.cases[r].params.location != studyrun::mechanism::Location::Ideal)
+        .collect();
+    let pool = if bearing.is_empty() { rows } else { &bearing };
+    let n = pool.len().min(CALIBRATION_CASES);
+    let mut picked: Vec<usize> = (0..n)
+        .map(|k| {
+            pool[if n > 1 {
+                k * (pool.len() - 1) / (n - 1)
+            } else {
+                0
+            }]
+        })
+        .collect();
+    picked.dedup();
+    picked
+}
+
+/// The case table, the memory estimate, the file size and a time estimate from short
+/// calibration runs (10 % of the duration) of up to five cases spread over the table.
+/// Never fails for want of an estimate: a calibration that cannot run says so.
+fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
+    let jobs = limits.jobs;
     let rows: Vec<usize> = match shard {
         Some(s) => study.shard(s.k, s.n),
         None => (0..study.cases.len()).collect(),
     };
     let mut header = vec!["case".to_string()];
     header.extend(study.axes.iter().cloned());
-    println!("{}", header.join("\t"));
+    out!("{}", header.join("\t"))?;
     for &r in &rows {
         let c = &study.cases[r];
         let mut line = vec![c.id.to_string()];
@@ -307,7 +442,7 @@ fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
                 None => c.params.location.to_string(),
             });
         }
-        println!("{}", line.join("\t"));
+        out!("{}", line.join("\t"))?;
     }
     let n_time = study.sampling.len() as f64;
     let n_freq = (study.analysis_window().len() / 2 + 1) as f64;
@@ -315,31 +450,79 @@ fn dry_run(study: &Study, shard: Option<Shard>, jobs: usize) -> Result<()> {
     let raw = rows.len() as f64
         * (CHANNELS.len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)
         * width;
-    if rows.is_empty() {
-        println!("\nno cases in this shard: the run writes a file with the references only");
-        return Ok(());
-    }
-    // Calibrate on 10 % of the first case's duration.
-    let probe = &study.cases[rows[0]].params;
-    let short = Sampling {
-        duration: 0.1 * study.sampling.duration,
-        ..study.sampling
-    };
-    let t = simulate(probe, &study.solver, &short)
-        .context("calibration run")?
-        .wall_time
-        * 10.0;
-    println!(
-        "\n{} cases ({} ideal references); raw output {:.1} MB before compression (deflate level {}, {}); estimated time ~{:.0} s on {jobs} threads (from {:.3} s for case {})",
+    let estimate = study.memory_estimate(jobs);
+    out!(
+        "\n{} cases ({} ideal references); raw output {:.1} MB before compression (deflate level {}, {})",
         rows.len(),
         study.references.len(),
         raw / 1e6,
         study.compression,
         if study.float32 { "float32" } else { "float64" },
-        t * rows.len() as f64 / jobs as f64,
-        t,
-        study.cases[rows[0]].id
-    );
+    )?;
+    out!(
+        "memory: about {} of the limit {}: {}",
+        memory::bytes(estimate.total),
+        limits.describe(),
+        estimate
+    )?;
+    if rows.is_empty() {
+        out!("no cases in this shard: the run writes a file with the references only")?;
+        return Ok(());
+    }
+    // Calibrate on 10 % of the duration of a few cases spread over the table.
+    let short = Sampling {
+        duration: 0.1 * study.sampling.duration,
+        ..study.sampling
+    };
+    let mut times = Vec::new();
+    let mut ids = Vec::new();
+    let mut failures = Vec::new();
+    let picked = calibration_rows(study, &rows);
+    for &r in &picked {
+        let case = &study.cases[r];
+        match simulate(&case.params, &study.solver, &short) {
+            Ok(o) => {
+                times.push(o.wall_time * 10.0);
+                ids.push(case.id.to_string());
+            }
+            Err(e) => failures.push(format!("case {}: {e}", case.id)),
+        }
+    }
+    if times.is_empty() {
+        out!(
+            "time: estimate unavailable: no calibration run finished ({})",
+            if failures.is_empty() {
+                "no case to calibrate on".to_string()
+            } else {
+                failures.join("; ")
+            }
+        )?;
+        return Ok(());
+    }
+    let mean = times.iter().sum::<f64>() / times.len() as f64;
+    out!(
+        "time: about {} s on {jobs} threads (a case takes {:.3} s on average over cases {}, from runs of 10 % of the duration{})",
+        {
+            let total = mean * rows.len() as f64 / jobs as f64;
+            if total < 10.0 {
+                format!("{total:.1}")
+            } else {
+                format!("{total:.0}")
+            }
+        },
+        mean,
+        ids.join(", "),
+        if failures.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; {} of {} calibration runs failed: {}",
+                failures.len(),
+                picked.len(),
+                failures.join("; ")
+            )
+        }
+    )?;
     Ok(())
 }
 
@@ -357,19 +540,41 @@ fn parse_rtol(text: &str) -> Result<f64, String> {
 fn accuracy_command(
     grid: &Path,
     output: Option<PathBuf>,
-    jobs: Option<usize>,
+    limits: Limits,
     force: bool,
     (methods, rtols): (&[String], &[f64]),
 ) -> Result<u8> {
     use studyrun::accuracy::{self, describe, ERROR_CHANNELS};
-    let study = load(grid)?;
-    let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
-    if output.exists() && !force {
-        anyhow::bail!("{} exists; use --force to overwrite it", output.display());
+    let study = load(grid, &limits)?;
+    // The accuracy study keeps every case's reference run (all channels) to the end,
+    // and each worker two more runs.
+    let run_bytes = (CHANNELS.len() + 1) as f64 * 8.0 * study.sampling.len() as f64;
+    let need = (study.cases.len() + study.references.len() + 3 * limits.jobs) as f64 * run_bytes
+        + 64.0 * 1024.0 * 1024.0;
+    if need > limits.memory as f64 {
+        return Err(StudyError {
+            path: grid.to_path_buf(),
+            location: None,
+            field: "grid".into(),
+            message: format!(
+                "the accuracy study keeps the reference run of each of its {} cases ({} each): \
+                 about {} of memory, more than the limit of {}; fewer cases, a lower \
+                 sample_rate or a shorter duration",
+                study.cases.len(),
+                memory::bytes(run_bytes),
+                memory::bytes(need),
+                limits.describe()
+            ),
+        }
+        .into());
     }
-    let jobs = jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
+    // The output first, before all the work: nothing there that is not ours, no
+    // replacing without --force, only a study file with it, and the lock held to the end.
+    output::overwrite::check_output(&output, force, &[grid])?;
+    let _lock = output::OutputLock::acquire(&output)?;
+    output::overwrite::check_output(&output, force, &[grid])?;
+    let jobs = limits.jobs;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
     let mut ladder = if rtols.is_empty() {
         accuracy::default_ladder()
@@ -379,7 +584,7 @@ fn accuracy_command(
     if !methods.is_empty() {
         ladder.retain(|m| methods.iter().any(|name| name == describe(m).0));
     }
-    eprintln!(
+    say!(
         "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
         ladder.len(),
         study.cases.len()
@@ -395,7 +600,7 @@ fn accuracy_command(
                 None => format!("{a}={}", c.params.location),
             })
             .collect();
-        println!(
+        out!(
             "\ncase {} ({}): horizon {:.3} s of {} s{}; reference metric uncertainty {:.1e} / {:.1e} / {:.1e}",
             c.id,
             labels.join(", "),
@@ -405,23 +610,23 @@ fn accuracy_command(
             r.metric_uncertainty[0],
             r.metric_uncertainty[1],
             r.metric_uncertainty[2]
-        );
-        println!("| method | setting | max err {0} | rms err {0} | metric err {0} | metric err {1} | metric err {2} | wall (s) | steps | rejected | RHS |", ERROR_CHANNELS[0], ERROR_CHANNELS[1], ERROR_CHANNELS[2]);
-        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        )?;
+        out!("| method | setting | max err {0} | rms err {0} | metric err {0} | metric err {1} | metric err {2} | wall (s) | steps | rejected | RHS |", ERROR_CHANNELS[0], ERROR_CHANNELS[1], ERROR_CHANNELS[2])?;
+        out!("|---|---|---|---|---|---|---|---|---|---|---|")?;
         for m in ms.iter().filter(|m| m.case == r.case) {
             let (name, setting) = describe(&m.method);
             match &m.error {
-                Some(e) => println!("| {name} | {setting:.0e} | failed: {e} |"),
-                None => println!(
+                Some(e) => out!("| {name} | {setting:.0e} | failed: {e} |")?,
+                None => out!(
                     "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.3} | {} | {} | {} |",
                     m.max_error[0], m.rms_error[0], m.metric_error[0], m.metric_error[1], m.metric_error[2], m.wall_time, m.steps, m.rejected, m.rhs_evals
-                ),
+                )?,
             }
         }
     }
-    println!("\nover all cases (metric error: worst channel, worst case):");
-    println!("| method | setting | worst metric error | median metric error | total wall (s) | total RHS |");
-    println!("|---|---|---|---|---|---|");
+    out!("\nover all cases (metric error: worst channel, worst case):")?;
+    out!("| method | setting | worst metric error | median metric error | total wall (s) | total RHS |")?;
+    out!("|---|---|---|---|---|---|")?;
     for method in &ladder {
         let rows: Vec<_> = ms.iter().filter(|m| m.method == *method).collect();
         let mut errs: Vec<f64> = rows
@@ -430,33 +635,33 @@ fn accuracy_command(
             .collect();
         errs.sort_by(f64::total_cmp);
         let (name, setting) = describe(method);
-        println!(
+        out!(
             "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.2} | {} |",
             errs.last().copied().unwrap_or(f64::NAN),
             errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN),
             rows.iter().map(|m| m.wall_time).sum::<f64>(),
             rows.iter().map(|m| m.rhs_evals).sum::<u64>()
-        );
+        )?;
     }
     let chaotic: Vec<String> = refs
         .iter()
         .filter(|r| r.horizon < study.sampling.duration)
         .map(|r| study.cases[r.case].id.to_string())
         .collect();
-    println!(
+    out!(
         "\nchaotic cases (the two references part before the end; horizon < {} s): {} of {}: {}",
         study.sampling.duration,
         chaotic.len(),
         refs.len(),
         chaotic.join(", ")
-    );
+    )?;
     match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01, study.sampling.duration) {
-        Some((m, judged)) => println!(
+        Some((m, judged)) => out!(
             "cheapest setting with metric error < 1 % on the {judged} non-chaotic cases: {m:?}"
-        ),
-        None => println!("no setting keeps the metric error below 1 % on every non-chaotic case"),
+        )?,
+        None => out!("no setting keeps the metric error below 1 % on every non-chaotic case")?,
     }
     accuracy::write_file(&output, &study, &refs, &ms)?;
-    eprintln!("studyrun: wrote {}", output.display());
+    say!("studyrun: wrote {}", output.display());
     Ok(EXIT_OK)
 }

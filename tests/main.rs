@@ -22,5 +22,6 @@ mod interop;
 mod isa;
 mod parity;
 mod properties;
+mod refusals;
 mod stiffness;
 mod validation;

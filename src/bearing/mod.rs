@@ -100,7 +100,16 @@ impl BearingParams {
                 "finite, with |clearance| below the ball diameter d_o - d_i (negative = preload)",
             ));
         }
-        non_negative("bearing.stiffness", self.stiffness)?;
+        // K = 0 is no bearing: the balls carry nothing and the journal leaves the
+        // races (a millimetre of eccentricity within a revolution).
+        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
+            return Err(ParamError::new(
+                "bearing.stiffness",
+                self.stiffness,
+                "finite and > 0 N/m^1.5 (with K = 0 the balls carry no load and the journal \
+                 passes through them)",
+            ));
+        }
         non_negative("bearing.damping", self.damping)?;
         self.inner_waviness.validate("bearing.inner_waviness")?;
         self.outer_waviness.validate("bearing.outer_waviness")?;

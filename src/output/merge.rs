@@ -78,13 +78,12 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             format!("{} is both a shard and the merged output", p.display())
         })?;
     }
+    // Nothing replaced that is not ours: no shard, no FIFO or link, and with --force
+    // only a study file; checked again under the lock.
+    let inputs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    super::overwrite::check_output(output, force, &inputs)?;
     let _lock = OutputLock::acquire(output)?;
-    if output.exists() && !force {
-        return Err(RunError::Refused(format!(
-            "{} exists; use --force to overwrite it",
-            output.display()
-        )));
-    }
+    super::overwrite::check_output(output, force, &inputs)?;
     let readers: Vec<StudyReader> = shards
         .iter()
         .map(|p| StudyReader::open(p).map_err(RunError::file(p)))

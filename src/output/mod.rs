@@ -70,6 +70,7 @@ mod inspect;
 mod layout;
 mod lock;
 mod merge;
+pub mod overwrite;
 mod paths;
 mod reader;
 mod reserve;

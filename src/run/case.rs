@@ -1,7 +1,7 @@
 //! One case of a study turned into what the file stores: series, spectra, metrics.
 
 use super::stats::thread_cpu;
-use crate::mechanism::CaseParams;
+use crate::mechanism::{CaseParams, Location};
 use crate::output::Status;
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis};
@@ -69,9 +69,12 @@ pub(crate) fn run_case(
             cost,
         }
     };
-    let out = match simulated {
+    let out = match simulated.map_err(|e| e.to_string()).and_then(|out| {
+        check_eccentricity(params, &out)?;
+        Ok(out)
+    }) {
         Ok(out) => out,
-        Err(e) => return failed(e.to_string(), cost),
+        Err(message) => return failed(message, cost),
     };
     let analysis = analyse(
         &out,
@@ -98,4 +101,93 @@ pub(crate) fn run_case(
         metrics,
         cost,
     }
+}
+
+/// Relative margin of [`check_eccentricity`]'s consistency bound over its exact value.
+pub const ECCENTRICITY_MARGIN: f64 = 1.5;
+/// Absolute margin of [`check_eccentricity`]'s bounds (m).
+pub const ECCENTRICITY_SLACK: f64 = 1e-6;
+
+/// Checks that a simulated bearing case is physically possible: the journal centre
+/// (eccentricity `e`, the `eccentricity_x/_y` channels) stays within what the
+/// clearance, the waviness and the Hertz penetration of the largest bearing force
+/// allow, and that penetration stays far below the ball size. With `G = P_d/2 + ΣΠ`
+/// (ΣΠ: every waviness amplitude and offset of both races), `c = cos(π/N_b)` (the
+/// ball nearest the direction of `e` is at most `π/N_b` from it) and `F_max` the
+/// largest sampled `|F|`:
+///
+/// - *consistency*: `|e| ≤ 1.5 max(|P_d|/2 + ΣΠ, (G + (F_max/(K c))^{2/3}) / c) + 1 µm`;
+///   the nearest ball's deflection is at most `(|F|/(K c))^{2/3}` when ball forces
+///   are at least `K δ^{3/2}` (docs/model.md §2), so a converged run stays well inside;
+///   a run beyond it is an integration gone wrong;
+/// - *elastic contact*: `|e| ≤ (|P_d|/2 + ΣΠ + D/10) / c + 1 µm` with the ball
+///   diameter `D = (d_o − d_i)/2`: a contact deflection of a tenth of the ball is far
+///   beyond elastic (Hertz) contact of steel; the load is too high for the bearing.
+///
+/// The ideal mechanism has no bearing and is not checked.
+pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), String> {
+    if params.location == Location::Ideal {
+        return Ok(());
+    }
+    let (Some(ex), Some(ey), Some(f)) = (
+        out.channel("eccentricity_x"),
+        out.channel("eccentricity_y"),
+        out.channel("bearing_force"),
+    ) else {
+        return Ok(());
+    };
+    let (mut e_max, mut at) = (0.0f64, 0);
+    for (k, (x, y)) in ex.iter().zip(ey).enumerate() {
+        let e = x.hypot(*y);
+        if e > e_max {
+            (e_max, at) = (e, k);
+        }
+    }
+    let f_max = f.iter().copied().fold(0.0f64, f64::max);
+    let b = &params.bearing;
+    let waviness: f64 = [&b.inner_waviness, &b.outer_waviness]
+        .iter()
+        .map(|w| w.offset.abs() + w.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>())
+        .sum();
+    let spacing = (std::f64::consts::PI / b.ball_count.max(3) as f64).cos();
+    let gap = 0.5 * b.clearance.abs() + waviness;
+    let hertz = if b.stiffness > 0.0 {
+        (f_max / (b.stiffness * spacing)).powf(2.0 / 3.0)
+    } else {
+        f64::INFINITY
+    };
+    let consistent = gap.max((0.5 * b.clearance + waviness + hertz) / spacing);
+    let consistent_bound = ECCENTRICITY_MARGIN * consistent + ECCENTRICITY_SLACK;
+    let ball = 0.5 * (b.outer_race_diameter - b.inner_race_diameter);
+    let elastic_bound = (gap + 0.1 * ball) / spacing + ECCENTRICITY_SLACK;
+    let t = out.times.get(at).copied().unwrap_or(f64::NAN);
+    let um = |x: f64| x * 1e6;
+    if e_max.is_nan() || e_max > consistent_bound {
+        return Err(format!(
+            "physically impossible result: the journal centre moved |e| = {:.1} um from the \
+             housing centre (t = {t:.4} s), more than the clearance (P_d/2 = {:.1} um), the \
+             waviness ({:.1} um) and the Hertz penetration of the largest bearing force \
+             ({f_max:.3e} N: {:.1} um) allow (bound {:.1} um with margin x{ECCENTRICITY_MARGIN} \
+             + 1 um); the integration went wrong: try a tighter rtol or a smaller step",
+            um(e_max),
+            um(0.5 * b.clearance),
+            um(waviness),
+            um(hertz),
+            um(consistent_bound),
+        ));
+    }
+    if e_max > elastic_bound {
+        return Err(format!(
+            "physically impossible result: the journal centre moved |e| = {:.1} um from the \
+             housing centre (t = {t:.4} s), more than the clearance (P_d/2 = {:.1} um) and \
+             waviness ({:.1} um) allow plus a tenth of the ball diameter (D/10 = {:.1} um): \
+             a ball contact deflection that large is far outside elastic (Hertz) contact; the \
+             load (largest bearing force {f_max:.3e} N) is too high for this bearing",
+            um(e_max),
+            um(0.5 * b.clearance),
+            um(waviness),
+            um(0.1 * ball),
+        ));
+    }
+    Ok(())
 }

@@ -18,6 +18,7 @@ mod order;
 mod progress;
 mod stats;
 
+pub use case::check_eccentricity;
 use case::run_case;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
@@ -33,8 +34,8 @@ use rayon::prelude::*;
 
 use crate::error::RunError;
 use crate::output::{
-    new_journal_path, side_paths, study_layout, ChunkEncoder, DataFile, Layout, OutputLock, Status,
-    StudyFingerprint, StudyReader, StudyWriter, REFERENCE_CHANNELS,
+    new_journal_path, overwrite, side_paths, study_layout, ChunkEncoder, DataFile, Layout,
+    OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter, REFERENCE_CHANNELS,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::simulate::{simulate, CaseOutput};
@@ -159,12 +160,9 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         Some(s) => study.shard(s.k, s.n),
         None => (0..study.cases.len()).collect(),
     };
-    if opts.output.is_dir() {
-        return Err(RunError::Refused(format!(
-            "{} is a directory; give the result file's path",
-            opts.output.display()
-        )));
-    }
+    // Nothing that is not ours is written over: checked before the lock file is
+    // made, and again (with the study-file check of --force) under the lock.
+    check_paths(study, &opts.output)?;
     let _lock = OutputLock::acquire(&opts.output)?;
     let layout = study_layout(study, &rows, opts.shard);
     let header = JournalHeader {
@@ -257,6 +255,9 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
 /// - neither: a fresh run (also with `--resume`, so a job script can always pass it).
 ///
 /// Left-over partial files without a journal belong to no run and are removed.
+/// Nothing that is not ours is replaced or removed: the output and its side files
+/// must be regular files (or absent) and none of them the grid file, and `--force`
+/// replaces only a study file ([`overwrite`]).
 fn decide_start(
     study: &Study,
     opts: &RunOptions,
@@ -272,6 +273,7 @@ fn decide_start(
             .into_iter()
             .chain(partials)
     };
+    let exists = check_paths(study, output)?;
     if journal_path.exists() {
         if opts.resume {
             return Ok(Start::Resume(JournalReader::open(&journal_path, header)?));
@@ -283,7 +285,7 @@ fn decide_start(
             )));
         }
     }
-    if output.exists() && !opts.force {
+    if exists && !opts.force {
         if !opts.resume {
             return Err(RunError::Refused(format!(
                 "{} exists; use --force to overwrite it",
@@ -293,10 +295,26 @@ fn decide_start(
         let summary = complete_result(study, opts, n_rows, start)?;
         return Ok(Start::Complete(summary));
     }
+    if exists {
+        // --force replaces a study result, nothing else.
+        overwrite::check_replaceable(output)?;
+    }
     for p in side_files() {
         remove_if_exists(&p)?;
     }
     Ok(Start::Fresh)
+}
+
+/// Refuses an output, or a file beside it the run would write or remove, that is not
+/// a regular file or is the grid file itself ([`overwrite::check_path`]). Returns whether
+/// the output exists.
+fn check_paths(study: &Study, output: &Path) -> Result<bool, RunError> {
+    let grid = [study.path.as_path()];
+    let exists = overwrite::check_path(output, "the output", &grid)?;
+    for (side, what) in overwrite::side_files(output) {
+        overwrite::check_path(&side, what, &grid)?;
+    }
+    Ok(exists)
 }
 
 /// The summary of `opts.output` when it is a complete result of `study` run as

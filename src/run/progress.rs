@@ -1,7 +1,7 @@
 //! Progress of a running study: an indicatif bar on a terminal, plain log lines
 //! (every 5 s and at the end) when stderr is not a terminal.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -69,9 +69,16 @@ impl Progress {
         let secs = self.start.elapsed().as_secs_f64();
         let rate = (self.done - self.already) as f64 / secs.max(1e-9);
         let eta = (self.total - self.done) as f64 / rate.max(1e-9);
-        eprintln!(
+        // A full disk or a closed stderr must not stop the run: the line is dropped.
+        let _ = writeln!(
+            std::io::stderr(),
             "studyrun: {}/{} cases, {:.1} cases/s, ETA {:.0} s, {} failed, {:.1} s elapsed",
-            self.done, self.total, rate, eta, self.failed, secs
+            self.done,
+            self.total,
+            rate,
+            eta,
+            self.failed,
+            secs
         );
     }
 

@@ -1,11 +1,13 @@
 //! From the serde mirror to a validated [`Study`]: units, effects, expansion, checks.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use serde_saphyr::Location;
 
 use super::config::{GridFile, Scalar, WavinessSection, S};
-use super::params::{lookup, PARAMETERS};
+use super::memory::{Limits, MemoryEstimate, Shape};
+use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
 use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 use crate::bearing::stiffness::ContactGeometry;
@@ -111,6 +113,23 @@ impl Ctx<'_> {
         effects: &Effects,
         prov: &mut Provenance,
     ) -> Result<(), StudyError> {
+        let target = self.resolve(case, name, v, field, effects)?;
+        target.set(case);
+        prov.push((target.name(), field.to_string(), at(&v.referenced)));
+        Ok(())
+    }
+
+    /// What setting parameter `name` (or `location`) from `v` does, checked: the
+    /// effect is on, the parameter exists, the unit fits, a count is a whole number.
+    /// `case` (the case being built) only words the messages.
+    fn resolve(
+        &self,
+        case: &CaseParams,
+        name: &str,
+        v: &S<Scalar>,
+        field: &str,
+        effects: &Effects,
+    ) -> Result<Target, StudyError> {
         let place = at(&v.referenced);
         if let Some((effect, false)) = effects.governing(name) {
             return Err(self.err(
@@ -130,11 +149,10 @@ impl Ctx<'_> {
                     ),
                 ));
             };
-            case.location = t
+            let site = t
                 .parse()
                 .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.allowed))?;
-            prov.push(("location", field.to_string(), place));
-            return Ok(());
+            return Ok(Target::Location(site));
         }
         let param = lookup(name).ok_or_else(|| {
             let names: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
@@ -149,23 +167,94 @@ impl Ctx<'_> {
         })?;
         let x = self.quantity(v, param.dimension, field)?;
         if param.integer && (x.fract() != 0.0 || x < 0.0 || x > u32::MAX as f64) {
-            return Err(self.err(
-                Some(place),
-                field,
-                format!("{} is not allowed: a whole number >= 0", v.value),
-            ));
+            let rule = if param.name == "ball_count" {
+                match max_balls(&case.bearing) {
+                    Some(max) if max >= 3 => format!(
+                        "ball_count must be a whole number of balls from 3 to {max}, got {} \
+                         ({max} balls fit between these races)",
+                        v.value
+                    ),
+                    _ => format!(
+                        "ball_count must be a whole number of balls, 3 or more, got {}",
+                        v.value
+                    ),
+                }
+            } else {
+                format!(
+                    "{} must be a whole number of waves, 1 or more, got {}",
+                    param.name, v.value
+                )
+            };
+            return Err(self.err(Some(place), field, rule));
         }
-        param.set(case, x);
-        prov.push((param.name, field.to_string(), place));
-        Ok(())
+        Ok(Target::Param(param, x))
     }
 }
 
-/// Builds the study from grid-file text.
-pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
+/// What one value of a grid sets in a case, resolved once before the expansion.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    /// A scalar parameter, in its base unit.
+    Param(&'static ParamDef, f64),
+    /// The bearing location.
+    Location(Site),
+}
+
+impl Target {
+    fn set(&self, case: &mut CaseParams) {
+        match *self {
+            Target::Param(p, x) => p.set(case, x),
+            Target::Location(site) => case.location = site,
+        }
+    }
+
+    /// The parameter's name, as in [`Provenance`].
+    fn name(&self) -> &'static str {
+        match self {
+            Target::Param(p, _) => p.name,
+            Target::Location(_) => "location",
+        }
+    }
+
+    /// Whether two values of one axis are the same (`-0` is `0`).
+    fn same_as(&self, other: &Target) -> bool {
+        match (self, other) {
+            (Target::Param(_, a), Target::Param(_, b)) => a == b,
+            (Target::Location(a), Target::Location(b)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+/// The most balls of the bearing's race diameters that fit side by side around the
+/// pitch circle: balls of diameter `D = (d_o − d_i)/2` with centres on the circle of
+/// diameter `d_m = (d_i + d_o)/2` touch when `N_b = π / asin(D/d_m)` (a full
+/// complement, no cage). `None` when the diameters are not a bearing.
+pub(crate) fn max_balls(b: &crate::bearing::BearingParams) -> Option<usize> {
+    let (di, d_o) = (b.inner_race_diameter, b.outer_race_diameter);
+    if !(di.is_finite() && d_o.is_finite() && di > 0.0 && d_o > di) {
+        return None;
+    }
+    let ratio = (d_o - di) / (d_o + di);
+    Some((std::f64::consts::PI / ratio.asin() + 1e-9).floor() as usize)
+}
+
+/// One grid axis with its values resolved: its YAML field and, per value, what it
+/// sets and where it is written.
+struct ResolvedAxis<'a> {
+    field: &'a str,
+    values: Vec<(Target, (u64, u64))>,
+}
+
+/// Builds the study from grid-file text, refusing it when its run would need more
+/// memory than `limits` allow (decided before the cases are expanded).
+pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
-    let file: GridFile =
-        serde_saphyr::from_str(text).map_err(|e| ctx.err(None, "", e.to_string()))?;
+    let file: GridFile = serde_saphyr::from_str(text).map_err(|e| {
+        let (place, field, message) = super::yaml::describe(&e, text);
+        ctx.err(place, &field, message)
+    })?;
+    check_name(&ctx, &file.name)?;
 
     let sampling = Sampling {
         duration: ctx.quantity(&file.duration, Dimension::Time, "duration")?,
@@ -186,7 +275,7 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
     let effects = effects(&ctx, &file)?;
     let mut prov = Provenance::new();
     let base = base_case(&ctx, &file, &effects, &mut prov)?;
-    let solver = solver(&ctx, &file)?;
+    let solver = solver(&ctx, &file, &sampling)?;
     let max_cases = file
         .max_cases
         .as_ref()
@@ -255,7 +344,7 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
         Some(t) if t <= max_cases => {}
         _ => {
             return Err(ctx.err(
-                None,
+                file.max_cases.as_ref().map(|m| at(&m.referenced)),
                 "grid",
                 format!(
                     "the grid expands to {} cases, more than max_cases = {max_cases}; raise `max_cases` if you mean it",
@@ -264,61 +353,121 @@ pub(super) fn build(text: &str, path: &Path) -> Result<Study, StudyError> {
             ))
         }
     }
-
-    // Each case is a list of assignments (parameter, value, YAML field) over the base:
-    // first the grid (mixed radix over the groups, last group fastest), then `cases:`.
+    let total = total.unwrap_or(0);
     let count = product.unwrap_or(0);
-    let grid_cases = (0..count).map(|i| {
+
+    // Every axis value resolved once (units, effects, whole numbers), and no value twice.
+    let resolved: Vec<Vec<ResolvedAxis<'_>>> = groups
+        .iter()
+        .map(|group| {
+            group
+                .iter()
+                .map(|(name, values, field)| {
+                    let values = values
+                        .value
+                        .iter()
+                        .enumerate()
+                        .map(|(k, v)| {
+                            let target =
+                                ctx.resolve(&base, name, v, &format!("{field}[{k}]"), &effects)?;
+                            Ok((target, at(&v.referenced)))
+                        })
+                        .collect::<Result<Vec<_>, StudyError>>()?;
+                    Ok(ResolvedAxis {
+                        field: field.as_str(),
+                        values,
+                    })
+                })
+                .collect::<Result<Vec<_>, StudyError>>()
+        })
+        .collect::<Result<_, _>>()?;
+    check_repeats(&ctx, &resolved)?;
+
+    // Memory, before anything is expanded: the case count is known, the references
+    // are at most the combinations of the axes an ideal mechanism depends on.
+    let references_bound = resolved
+        .iter()
+        .filter(|group| {
+            group.iter().any(|axis| {
+                axis.values
+                    .first()
+                    .is_some_and(|(t, _)| shapes_reference(t.name()))
+            })
+        })
+        .try_fold(1u64, |acc, g| acc.checked_mul(g[0].values.len() as u64))
+        .unwrap_or(u64::MAX)
+        .saturating_add(file.cases.len() as u64)
+        .min(total.max(1));
+    let samples = sampling.len() as u64;
+    let shape = Shape {
+        samples,
+        window: samples,
+        spectra: file
+            .spectra
+            .as_ref()
+            .and_then(|s| s.channels.as_ref())
+            .map_or(3, |c| c.value.len()),
+        float32: file
+            .output
+            .as_ref()
+            .and_then(|o| o.dtype.as_ref())
+            .is_some_and(|d| d.value == "float32"),
+        cases: total,
+        references: references_bound,
+    };
+    check_memory(&ctx, &file, &MemoryEstimate::of(shape, limits.jobs), limits)?;
+
+    // Each case is the base with one value of every group (mixed radix over the
+    // groups, last group fastest), then the explicit `cases:` over the base. Where
+    // each value came from is only put together when a case is refused.
+    let mut cases = Vec::with_capacity(total as usize);
+    let mut picks = vec![0usize; resolved.len()];
+    for i in 0..count {
         let mut rest = i;
-        let mut picks = vec![0usize; groups.len()];
-        for (g, group) in groups.iter().enumerate().rev() {
-            let len = group[0].1.value.len() as u64;
+        for (g, group) in resolved.iter().enumerate().rev() {
+            let len = group[0].values.len() as u64;
             picks[g] = (rest % len) as usize;
             rest /= len;
         }
-        groups
-            .iter()
-            .zip(picks)
-            .flat_map(|(group, k)| {
-                group.iter().map(move |(name, values, field)| {
-                    (name.as_str(), &values.value[k], format!("{field}[{k}]"))
-                })
-            })
-            .collect::<Vec<_>>()
-    });
-    let explicit_cases = file.cases.iter().enumerate().map(|(c, explicit)| {
-        explicit
-            .value
-            .iter()
-            .map(|(name, v)| (name.as_str(), v, format!("cases[{c}].{name}")))
-            .collect::<Vec<_>>()
-    });
-    let mut cases = Vec::new();
-    for assignments in grid_cases.chain(explicit_cases) {
+        let mut params = base.clone();
+        for (group, &k) in resolved.iter().zip(&picks) {
+            for axis in group {
+                axis.values[k].0.set(&mut params);
+            }
+        }
+        let provenance = || {
+            let mut p = prov.clone();
+            for (group, &k) in resolved.iter().zip(&picks) {
+                for axis in group {
+                    let (target, place) = axis.values[k];
+                    p.push((target.name(), format!("{}[{k}]", axis.field), place));
+                }
+            }
+            p
+        };
+        cases.push(finish_case(&ctx, params, &effects, provenance, i)?);
+    }
+    for (c, explicit) in file.cases.iter().enumerate() {
         let mut params = base.clone();
         let mut case_prov = prov.clone();
-        for (name, value, field) in &assignments {
-            ctx.apply(&mut params, name, value, field, &effects, &mut case_prov)?;
+        for (name, value) in &explicit.value {
+            let field = format!("cases[{c}].{name}");
+            ctx.apply(&mut params, name, value, &field, &effects, &mut case_prov)?;
         }
-        cases.push(finish_case(
-            &ctx,
-            params,
-            &effects,
-            &case_prov,
-            cases.len() as u64,
-        )?);
+        let id = cases.len() as u64;
+        cases.push(finish_case(&ctx, params, &effects, || case_prov, id)?);
     }
 
+    // One reference per distinct ideal mechanism, found by hashing (not by comparing
+    // every case with every reference).
     let mut references: Vec<CaseParams> = Vec::new();
+    let mut index: HashMap<ReferenceKey, usize> = HashMap::new();
     for case in &mut cases {
         let reference = reference_of(&case.params);
-        case.reference = match references.iter().position(|r| *r == reference) {
-            Some(k) => k,
-            None => {
-                references.push(reference);
-                references.len() - 1
-            }
-        };
+        case.reference = *index.entry(reference_key(&reference)).or_insert_with(|| {
+            references.push(reference);
+            references.len() - 1
+        });
     }
 
     let min_rpm = cases
@@ -459,12 +608,180 @@ fn reference_of(p: &CaseParams) -> CaseParams {
     }
 }
 
-/// Applies the effects that are off, then validates, pointing errors at the YAML.
+/// What an ideal mechanism depends on: its bodies, speed and gravity. Destructured in
+/// full, so that a new parameter cannot be left out unnoticed.
+type ReferenceKey = ([u64; 9], bool);
+
+fn reference_key(p: &CaseParams) -> ReferenceKey {
+    let CaseParams {
+        mechanism,
+        bearing: _,
+        location: _,
+        rpm,
+        gravity,
+    } = p;
+    let crate::mechanism::MechanismParams {
+        crank_length,
+        rod_length,
+        crank_mass,
+        crank_inertia,
+        rod_mass,
+        rod_inertia,
+        slider_mass,
+        slider_inertia,
+    } = mechanism;
+    let bits = |x: &f64| (x + 0.0).to_bits();
+    (
+        [
+            bits(crank_length),
+            bits(rod_length),
+            bits(crank_mass),
+            bits(crank_inertia),
+            bits(rod_mass),
+            bits(rod_inertia),
+            bits(slider_mass),
+            bits(slider_inertia),
+            bits(rpm),
+        ],
+        *gravity,
+    )
+}
+
+/// Whether the parameter called `name` changes the ideal mechanism (and so the
+/// references): the speed and the bodies.
+fn shapes_reference(name: &str) -> bool {
+    name == "rpm" || lookup(name).is_some_and(|p| p.field.starts_with("mechanism."))
+}
+
+/// Refuses a value an axis already has (a grid axis), or a row a zip group already
+/// has: the same cases would run twice.
+fn check_repeats(ctx: &Ctx<'_>, groups: &[Vec<ResolvedAxis<'_>>]) -> Result<(), StudyError> {
+    let key = |t: &Target| match *t {
+        Target::Param(_, x) => (x + 0.0).to_bits(),
+        Target::Location(site) => site as u64,
+    };
+    for group in groups {
+        let rows = group[0].values.len();
+        let mut seen: HashMap<Vec<u64>, usize> = HashMap::with_capacity(rows);
+        for k in 0..rows {
+            let row: Vec<u64> = group.iter().map(|a| key(&a.values[k].0)).collect();
+            if let Some(&first) = seen.get(&row) {
+                let same = group
+                    .iter()
+                    .all(|a| a.values[k].0.same_as(&a.values[first].0));
+                if same {
+                    let axis = &group[0];
+                    let message = if group.len() == 1 {
+                        format!(
+                            "repeats {}[{first}] (the same value); give each value of an axis once",
+                            axis.field
+                        )
+                    } else {
+                        let zip = axis.field.split('.').next().unwrap_or(axis.field);
+                        format!(
+                            "row {k} of {zip} repeats its row {first} (the same value of every \
+                             axis of the group); give each combination once"
+                        )
+                    };
+                    return Err(ctx.err(
+                        Some(axis.values[k].1),
+                        &format!("{}[{k}]", axis.field),
+                        message,
+                    ));
+                }
+            }
+            seen.insert(row, k);
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a study whose run would need more memory than `limits.memory`, naming the
+/// estimate, its parts, the limit and what lowers it.
+fn check_memory(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    estimate: &MemoryEstimate,
+    limits: &Limits,
+) -> Result<(), StudyError> {
+    if estimate.total <= limits.memory as f64 {
+        return Ok(());
+    }
+    let (place, field, remedy) = if estimate.dominated_by_samples() {
+        (
+            Some(at(&file.sample_rate.referenced)),
+            "sample_rate",
+            format!(
+                "a lower sample_rate or a shorter duration ({} samples per case now), \
+                 `output: {{dtype: float32}}` (halves the encoded records), fewer \
+                 `spectra: channels`, or fewer workers (-j)",
+                estimate.shape.samples
+            ),
+        )
+    } else {
+        (
+            file.max_cases.as_ref().map(|m| at(&m.referenced)),
+            "grid",
+            format!(
+                "fewer cases ({} now: fewer axis values), or a run in shards on several \
+                 machines is no help here, since each holds the whole case table",
+                estimate.shape.cases
+            ),
+        )
+    };
+    Err(ctx.err(
+        place,
+        field,
+        format!(
+            "the study needs about {} of memory, more than the limit of {}: {}. To need less: {remedy}",
+            super::memory::bytes(estimate.total),
+            limits.describe(),
+            estimate
+        ),
+    ))
+}
+
+/// The study name gives the default output file `<name>.h5` in the working directory:
+/// a plain file name.
+fn check_name(ctx: &Ctx<'_>, name: &S<String>) -> Result<(), StudyError> {
+    let n = &name.value;
+    let why = if n.trim().is_empty() {
+        Some("is empty")
+    } else if n.contains('/') || n.contains('\\') {
+        Some("contains a path separator (/ or \\)")
+    } else if n.contains("..") {
+        Some("contains `..`")
+    } else if n.starts_with('.') {
+        Some("starts with a dot (a hidden file)")
+    } else if n.chars().any(char::is_control) {
+        Some("contains a control character")
+    } else if n.len() > 200 {
+        Some("is longer than 200 bytes")
+    } else {
+        None
+    };
+    match why {
+        None => Ok(()),
+        Some(why) => Err(ctx.err(
+            Some(at(&name.referenced)),
+            "name",
+            format!(
+                "{:?} {why}; the name gives the default output file <name>.h5 in the \
+                 working directory, so it must be a plain file name: not empty, no / or \\, \
+                 no `..`, not starting with a dot, no control characters, at most 200 bytes",
+                n
+            ),
+        )),
+    }
+}
+
+/// Applies the effects that are off, then validates, pointing errors at the YAML
+/// (`prov`, called only then, says where each parameter was set).
 fn finish_case(
     ctx: &Ctx<'_>,
     mut params: CaseParams,
     effects: &Effects,
-    prov: &Provenance,
+    prov: impl FnOnce() -> Provenance,
     id: u64,
 ) -> Result<Case, StudyError> {
     if !effects.clearance {
@@ -478,7 +795,9 @@ fn finish_case(
         params.bearing.damping = 0.0;
     }
     params.gravity = effects.gravity;
-    params.validate().map_err(|e| {
+    let checked = params.validate().and_then(|()| balls_fit(&params));
+    checked.map_err(|e| {
+        let prov = prov();
         let source = prov.iter().rev().find(|(name, _, _)| {
             lookup(name).is_some_and(|p| p.field == e.field)
                 || (*name == "location" && e.field == "location")
@@ -504,6 +823,27 @@ fn finish_case(
         params,
         reference: 0,
     })
+}
+
+/// A bearing's balls fit between its races ([`max_balls`]).
+fn balls_fit(params: &CaseParams) -> Result<(), crate::error::ParamError> {
+    let b = &params.bearing;
+    match max_balls(b) {
+        Some(max) if params.location != Site::Ideal && b.ball_count > max => {
+            Err(crate::error::ParamError::new(
+                "bearing.ball_count",
+                b.ball_count,
+                format!(
+                    "at most {max} balls fit between these races (balls of diameter \
+                     (d_o - d_i)/2 = {:.2} mm side by side around the pitch circle of \
+                     diameter (d_i + d_o)/2 = {:.2} mm)",
+                    0.5e3 * (b.outer_race_diameter - b.inner_race_diameter),
+                    0.5e3 * (b.outer_race_diameter + b.inner_race_diameter)
+                ),
+            ))
+        }
+        _ => Ok(()),
+    }
 }
 
 fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
@@ -790,7 +1130,11 @@ fn harris(
     })
 }
 
-fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> {
+fn solver(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+) -> Result<SolverSettings, StudyError> {
     let s = match &file.solver {
         Some(s) => s,
         None => return Ok(SolverSettings::new(Method::DEFAULT)),
@@ -816,11 +1160,31 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
             }
         }
     };
+    // A tolerance or step outside these ranges is a typo or a misunderstanding: a
+    // relative tolerance of 10 % or more integrates nothing, one below 1e-14 asks
+    // for more than float64 holds; no step can be longer than the run.
+    let within = |v: &Option<S<Scalar>>, x: f64, field: &str, ok: bool, rule: String| match v {
+        Some(v) if !ok => Err(ctx.err(
+            Some(at(&v.referenced)),
+            field,
+            format!("{x} is not allowed: {rule}"),
+        )),
+        _ => Ok(x),
+    };
     let rtol = positive(
         &s.rtol,
         Dimension::Dimensionless,
         "solver.rtol",
         DEFAULT_RTOL,
+    )?;
+    let rtol = within(
+        &s.rtol,
+        rtol,
+        "solver.rtol",
+        (1e-14..0.1).contains(&rtol),
+        "a relative tolerance > 0, from 1e-14 up to (not including) 0.1; 1e-6 to 1e-10 \
+         are usual"
+            .into(),
     )?;
     let atol = positive(
         &s.atol,
@@ -828,14 +1192,35 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
         "solver.atol",
         DEFAULT_ATOL,
     )?;
+    let duration = sampling.duration;
+    let spacing = 1.0 / sampling.sample_rate;
     let method = match s.method.as_ref().map(|m| m.value.as_str()) {
         Some("dopri5") => Method::DormandPrince { rtol, atol },
         Some("tsit5") => Method::Tsit5 { rtol, atol },
         None | Some("dop853") => Method::Dop853 { rtol, atol },
         Some("sdirk4") => Method::Sdirk4 { rtol, atol },
-        Some("rk4") => Method::Rk4 {
-            step: positive(&s.step, Dimension::Time, "solver.step", 20e-6)?,
-        },
+        Some("rk4") => {
+            let step = positive(&s.step, Dimension::Time, "solver.step", 20e-6)?;
+            // RK4 steps at a fixed size and interpolates the samples between its
+            // steps: a step longer than the sample spacing would only interpolate
+            // the content the samples are there to resolve.
+            let rule = format!(
+                "RK4's fixed step must be at most the sample spacing 1/sample_rate = {spacing} s \
+                 (and the duration {duration} s): with longer steps the samples between \
+                 them are only interpolated"
+            );
+            if s.step.is_none() && step > spacing * (1.0 + 1e-9) {
+                return Err(ctx.err(
+                    s.method.as_ref().map(|m| at(&m.referenced)),
+                    "solver.step",
+                    format!("the default step {step} s is too long: {rule}; give `step`"),
+                ));
+            }
+            let ok = step <= spacing * (1.0 + 1e-9) && step <= duration;
+            Method::Rk4 {
+                step: within(&s.step, step, "solver.step", ok, rule)?,
+            }
+        }
         Some(other) => {
             let m = s.method.as_ref().map(|m| at(&m.referenced));
             return Err(ctx.err(
@@ -884,13 +1269,27 @@ fn solver(ctx: &Ctx<'_>, file: &GridFile) -> Result<SolverSettings, StudyError> 
         settings.locate_events = l.value;
     }
     if let Some(m) = &s.max_steps {
+        if m.value == 0 {
+            return Err(ctx.err(
+                Some(at(&m.referenced)),
+                "solver.max_steps",
+                "0 is not allowed: a budget of at least 1 step per case",
+            ));
+        }
         settings.max_steps = m.value;
     }
-    settings.max_step = positive(
+    let max_step = positive(
         &s.max_step,
         Dimension::Time,
         "solver.max_step",
         f64::INFINITY,
+    )?;
+    settings.max_step = within(
+        &s.max_step,
+        max_step,
+        "solver.max_step",
+        max_step <= duration,
+        format!("a largest step > 0 and at most the duration {duration} s"),
     )?;
     Ok(settings)
 }

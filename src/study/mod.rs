@@ -11,8 +11,10 @@
 
 pub mod config;
 mod expand;
+pub mod memory;
 pub mod params;
 pub mod units;
+mod yaml;
 
 use std::fmt;
 use std::ops::Range;
@@ -23,6 +25,7 @@ use crate::simulate::Sampling;
 use crate::solve::SolverSettings;
 
 pub use expand::Effects;
+pub use memory::{Limits, MemoryEstimate};
 
 /// Default largest number of cases a grid may expand to (`max_cases:` overrides).
 pub const DEFAULT_MAX_CASES: u64 = 100_000;
@@ -104,20 +107,49 @@ pub struct Study {
 }
 
 impl Study {
-    /// Reads and validates the grid file at `path`.
+    /// Reads and validates the grid file at `path` under the default [`Limits`] (half
+    /// the memory, all cores).
     pub fn load(path: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(path).map_err(|e| StudyError {
+        Self::load_with(path, &Limits::default())
+    }
+
+    /// Reads and validates the grid file at `path`, refusing a file larger than
+    /// [`memory::MAX_GRID_BYTES`] before parsing it and a study whose run needs more
+    /// memory than `limits` allow before expanding it.
+    pub fn load_with(path: &Path, limits: &Limits) -> Result<Self, StudyError> {
+        let text = memory::read_capped(path).map_err(|message| StudyError {
             path: path.to_path_buf(),
             location: None,
             field: String::new(),
-            message: format!("cannot read: {e}"),
+            message,
         })?;
-        Self::from_yaml(&text, path)
+        Self::from_yaml_with(&text, path, limits)
     }
 
-    /// Parses and validates grid-file `text` (`path` is used in messages only).
+    /// Parses and validates grid-file `text` (`path` is used in messages only) under
+    /// the default [`Limits`].
     pub fn from_yaml(text: &str, path: &Path) -> Result<Self, StudyError> {
-        expand::build(text, path)
+        Self::from_yaml_with(text, path, &Limits::default())
+    }
+
+    /// Parses and validates grid-file `text` under `limits`.
+    pub fn from_yaml_with(text: &str, path: &Path, limits: &Limits) -> Result<Self, StudyError> {
+        expand::build(text, path, limits)
+    }
+
+    /// What a run of this study on `jobs` workers needs in memory.
+    pub fn memory_estimate(&self, jobs: usize) -> MemoryEstimate {
+        MemoryEstimate::of(
+            memory::Shape {
+                samples: self.sampling.len() as u64,
+                window: self.analysis_window().len() as u64,
+                spectra: self.spectrum_channels.len(),
+                float32: self.float32,
+                cases: self.cases.len() as u64,
+                references: self.references.len() as u64,
+            },
+            jobs,
+        )
     }
 
     /// Indices of the samples the metrics and spectra analyse, `transient ≤ t <

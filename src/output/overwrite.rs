@@ -1,0 +1,161 @@
+//! Nothing replaced that is not ours: the checks every command makes before it
+//! writes, replaces or removes a file at a path the user named.
+//!
+//! - an output (and its side files: journal, partial files, lock) is a regular file
+//!   or nothing: never a directory, a FIFO, a device, a socket or a symbolic link
+//!   (whatever it points to), with or without `--force`;
+//! - it is none of the command's inputs (the grid file, a shard), compared by device
+//!   and inode, so another spelling of the same path is caught;
+//! - `--force` replaces only a studyrun study file (one [`StudyReader::open`] opens:
+//!   an HDF5 file with the `studyrun_file_format` root attribute); anything else is
+//!   refused and left as it is.
+
+use std::fs::Metadata;
+use std::os::unix::fs::{FileTypeExt, MetadataExt};
+use std::path::Path;
+
+use crate::error::RunError;
+use crate::output::StudyReader;
+
+/// What kind of thing `m` is, for messages.
+fn kind(m: &Metadata) -> &'static str {
+    let t = m.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a regular file"
+    }
+}
+
+/// Checks what is at `path`, a file a command is about to create, replace or remove:
+/// nothing, or a regular file that is none of `inputs`. Returns whether a regular file
+/// is there. `what` names the path's role in messages (`the output`, `the journal`).
+pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, RunError> {
+    let m = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
+        Err(e) => return Err(RunError::io("inspect", path)(e)),
+    };
+    let t = m.file_type();
+    if t.is_symlink() {
+        let target = std::fs::read_link(path)
+            .map(|t| format!(" to {}", t.display()))
+            .unwrap_or_default();
+        return Err(RunError::Refused(format!(
+            "{} ({what}) is a symbolic link{target}; studyrun neither writes through nor \
+             replaces links: give the path of a regular file",
+            path.display()
+        )));
+    }
+    if !t.is_file() {
+        return Err(RunError::Refused(format!(
+            "{} ({what}) is {}, not a regular file; studyrun writes regular files only and \
+             replaces nothing else{}",
+            path.display(),
+            kind(&m),
+            if t.is_dir() {
+                ": give the result file's path"
+            } else {
+                ""
+            }
+        )));
+    }
+    for input in inputs {
+        if let Ok(i) = std::fs::metadata(input) {
+            if i.dev() == m.dev() && i.ino() == m.ino() {
+                return Err(RunError::Refused(format!(
+                    "{} ({what}) is the input {} itself; choose another output",
+                    path.display(),
+                    input.display()
+                )));
+            }
+        }
+    }
+    Ok(true)
+}
+
+/// Checks that the regular file at `output` is a studyrun study file, the only kind
+/// `--force` replaces.
+pub fn check_replaceable(output: &Path) -> Result<(), RunError> {
+    match StudyReader::open(output) {
+        Ok(_) => Ok(()),
+        Err(e) => Err(RunError::Refused(format!(
+            "{} is not a studyrun result file, and --force replaces only those ({}); \
+             nothing was changed: remove it yourself if you mean to, or choose another output",
+            output.display(),
+            first_line(&e.to_string())
+        ))),
+    }
+}
+
+/// Checks `output` for a command that writes it from scratch (`merge`, `accuracy`):
+/// refuses what [`check_path`] refuses, an existing file without `force`, and with
+/// `force` anything but a study file. Returns whether a file is there to replace.
+pub fn check_output(output: &Path, force: bool, inputs: &[&Path]) -> Result<bool, RunError> {
+    let exists = check_path(output, "the output", inputs)?;
+    for (side, what) in side_files(output) {
+        check_path(&side, what, inputs)?;
+    }
+    if exists {
+        if !force {
+            return Err(RunError::Refused(format!(
+                "{} exists; use --force to overwrite it",
+                output.display()
+            )));
+        }
+        check_replaceable(output)?;
+    }
+    Ok(exists)
+}
+
+/// The files that belong to the result file `output`, with their roles.
+pub fn side_files(output: &Path) -> [(std::path::PathBuf, &'static str); 5] {
+    use super::{new_journal_path, side_paths, with_suffix, DataFile};
+    let (journal, _) = side_paths(output);
+    [
+        (journal, "the journal"),
+        (new_journal_path(output), "the new journal"),
+        (DataFile::Partial.path(output), "the partial file"),
+        (DataFile::Resumed.path(output), "the resumed partial file"),
+        (with_suffix(output, ".lock"), "the lock file"),
+    ]
+}
+
+/// The first line of `text` (HDF5 errors can run over several).
+fn first_line(text: &str) -> &str {
+    text.lines().next().unwrap_or(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_regular_files_that_are_not_inputs_pass() {
+        let dir = tempfile::tempdir().unwrap();
+        let grid = dir.path().join("g.yaml");
+        std::fs::write(&grid, "x").unwrap();
+        assert!(!check_path(&dir.path().join("new.h5"), "the output", &[&grid]).unwrap());
+        assert!(check_path(&dir.path().join("g.yaml"), "the output", &[]).unwrap());
+        let e = check_path(&dir.path().join("./g.yaml"), "the output", &[&grid]).unwrap_err();
+        assert!(e.to_string().contains("is the input"), "{e}");
+        let e = check_path(dir.path(), "the output", &[]).unwrap_err();
+        assert!(e.to_string().contains("a directory"), "{e}");
+        std::os::unix::fs::symlink(&grid, dir.path().join("link.h5")).unwrap();
+        let e = check_path(&dir.path().join("link.h5"), "the output", &[]).unwrap_err();
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        let e = check_replaceable(&grid).unwrap_err();
+        assert!(e.to_string().contains("not a studyrun result file"), "{e}");
+        assert_eq!(std::fs::read_to_string(&grid).unwrap(), "x");
+    }
+}

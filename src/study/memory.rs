@@ -1,0 +1,426 @@
+//! Bounded memory, decided before anything runs: what a study's run holds in memory
+//! ([`MemoryEstimate`]), the limit it must fit ([`Limits`]) and the size cap of a
+//! grid file ([`MAX_GRID_BYTES`]).
+//!
+//! A run holds, at its peak (docs/model.md leaves this to the engine; the figures are
+//! upper bounds, series are float64 in memory whatever the file stores):
+//!
+//! - per worker, the case it is computing: its samples × (channels + time) as
+//!   float64, the spectra with their FFT buffers, and the case's encoded record
+//!   (samples × channels + spectra bins, at the stored width) with the encoder's
+//!   scratch;
+//! - the records waiting for the writer: at most two per worker, and the one it writes;
+//! - the ideal references, every channel of each, for the whole run;
+//! - the case table: every case's parameters, their copy in the file's layout and the
+//!   run's bookkeeping;
+//! - a fixed part for the program, the HDF5 library and thread stacks.
+
+use std::fmt;
+use std::path::Path;
+
+use crate::simulate::CHANNELS;
+use crate::study::params::PARAMETERS;
+
+/// Largest grid file read (bytes): a grid of this size already expands to more cases
+/// than any memory holds; larger files (and endless ones such as `/dev/zero`) are
+/// refused before parsing.
+pub const MAX_GRID_BYTES: u64 = 4 << 20;
+
+/// Most worker threads accepted in any case (`-j`); see [`max_jobs`].
+pub const MAX_JOBS: usize = 1024;
+
+/// Memory of the program itself: code, the HDF5 library, allocator arenas (bytes).
+const FIXED_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+/// Per worker beyond its case's data: thread stack, deflate state, FFT twiddles.
+const WORKER_BYTES: f64 = 4.0 * 1024.0 * 1024.0;
+
+/// The most worker threads a run may start: four per available core, at most
+/// [`MAX_JOBS`]. More only adds threads that wait (and memory for their buffers).
+pub fn max_jobs() -> usize {
+    (4 * available_cores()).clamp(1, MAX_JOBS)
+}
+
+/// The cores this process may run on (1 if unknown).
+pub fn available_cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Bytes one case takes in the case table of a run: its parameters (with the
+/// waviness harmonics on the heap), their copy in the file's layout (one f64 per
+/// parameter, the location label, case id and reference index), the copies the file
+/// writer makes of them while it creates the file, and the run's per-case
+/// bookkeeping (row, dispatch order, journal index). Measured: a run of 200 000 cases
+/// of 11 samples peaks at 232 MB, 1.1 kB per case.
+pub fn case_table_bytes() -> f64 {
+    let case = std::mem::size_of::<super::Case>() as f64;
+    let harmonics = 2.0 * 32.0;
+    let layout = 8.0 * PARAMETERS.len() as f64 + (24.0 + 32.0) + 16.0;
+    let writer = 8.0 * PARAMETERS.len() as f64 + (24.0 + 32.0) + 16.0 + 256.0;
+    let bookkeeping = 64.0;
+    case + harmonics + layout + writer + bookkeeping
+}
+
+/// What determines a study's memory, known before its cases are expanded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shape {
+    /// Samples per case, both ends included.
+    pub samples: u64,
+    /// Samples in the analysed window (the spectra's length).
+    pub window: u64,
+    /// Spectrum channels.
+    pub spectra: usize,
+    /// Series and spectra stored as float32.
+    pub float32: bool,
+    /// Cases in the study.
+    pub cases: u64,
+    /// Ideal references (an upper bound before expansion).
+    pub references: u64,
+}
+
+/// The memory a run of a study needs at its peak, by part (bytes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MemoryEstimate {
+    /// What it was estimated for.
+    pub shape: Shape,
+    /// Worker threads.
+    pub jobs: usize,
+    /// One case in a worker: series as float64, spectra and FFT buffers, its
+    /// encoded record and the encoder's scratch.
+    pub per_case: f64,
+    /// One encoded record (series and spectra at the stored width).
+    pub record: f64,
+    /// Records waiting for the writer (two per worker) and the one it writes.
+    pub queued: f64,
+    /// The ideal references' series, held for the whole run.
+    pub references: f64,
+    /// The case table: parameters, their copy in the file layout, bookkeeping.
+    pub case_table: f64,
+    /// The program, libraries, thread stacks, the time and frequency coordinates.
+    pub fixed: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+impl MemoryEstimate {
+    /// The estimate for a study of `shape` run on `jobs` workers.
+    pub fn of(shape: Shape, jobs: usize) -> Self {
+        let n = shape.samples as f64;
+        let n_w = shape.window as f64;
+        let n_f = (shape.window / 2 + 1) as f64;
+        let s = shape.spectra as f64;
+        let channels = CHANNELS.len() as f64;
+        let width = if shape.float32 { 4.0 } else { 8.0 };
+        let jobs_f = jobs.max(1) as f64;
+        // The case's series and their times, float64.
+        let series = (channels + 1.0) * n * 8.0;
+        // Spectra, the FFT's window, input, output and scratch, the metrics' temporaries.
+        let analysis = s * n_f * 8.0 + 3.0 * n_w * 8.0 + 2.0 * n_f * 16.0;
+        let record = (channels * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
+        // The encoder shuffles one series at a time.
+        let scratch = n * width + WORKER_BYTES;
+        let per_case = series + analysis + record + scratch;
+        let queued = (2.0 * jobs_f + 1.0) * record;
+        let references = shape.references as f64 * series;
+        let case_table = shape.cases as f64 * case_table_bytes();
+        let fixed = FIXED_BYTES + (n + n_f) * 8.0;
+        let total = jobs_f * per_case + queued + references + case_table + fixed;
+        Self {
+            shape,
+            jobs: jobs.max(1),
+            per_case,
+            record,
+            queued,
+            references,
+            case_table,
+            fixed,
+            total,
+        }
+    }
+
+    /// Whether the per-case parts (workers, queue, references) outweigh the case table:
+    /// then the sampling is what to lower, else the number of cases.
+    pub fn dominated_by_samples(&self) -> bool {
+        self.jobs as f64 * self.per_case + self.queued + self.references > self.case_table
+    }
+}
+
+impl fmt::Display for MemoryEstimate {
+    /// The breakdown, e.g. `2 workers × 9.8 GiB per case (…), …`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.shape;
+        write!(
+            f,
+            "{} worker{} x {} per case ({} samples x {} channels as float64, {} spectr{}, \
+             the encoded record), {} records queued for the writer x {}, {} reference{} x {}, \
+             case table {} cases x {:.0} B = {}, fixed {}",
+            self.jobs,
+            if self.jobs == 1 { "" } else { "s" },
+            bytes(self.per_case),
+            s.samples,
+            CHANNELS.len(),
+            s.spectra,
+            if s.spectra == 1 { "um" } else { "a" },
+            2 * self.jobs + 1,
+            bytes(self.record),
+            s.references,
+            if s.references == 1 { "" } else { "s" },
+            bytes(if s.references == 0 {
+                0.0
+            } else {
+                self.references / s.references as f64
+            }),
+            s.cases,
+            case_table_bytes(),
+            bytes(self.case_table),
+            bytes(self.fixed),
+        )
+    }
+}
+
+/// How much memory a study may need and how many workers it runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest memory estimate accepted (bytes).
+    pub memory: u64,
+    /// Where [`Limits::memory`] came from.
+    pub memory_source: LimitSource,
+    /// Worker threads the estimate is made for.
+    pub jobs: usize,
+}
+
+/// Where a memory limit came from, for messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LimitSource {
+    /// Half of the physical memory (or of the control group's limit, if lower).
+    Default {
+        /// The memory it is half of (bytes).
+        physical: u64,
+    },
+    /// Given by the caller (`--memory-limit`).
+    Explicit,
+}
+
+impl Default for Limits {
+    /// Half of the memory this process may use, all available cores.
+    fn default() -> Self {
+        let physical = physical_memory().unwrap_or(8 << 30);
+        Self {
+            memory: physical / 2,
+            memory_source: LimitSource::Default { physical },
+            jobs: available_cores(),
+        }
+    }
+}
+
+impl Limits {
+    /// The default limits with the caller's memory limit (bytes) and workers, where given.
+    pub fn new(memory: Option<u64>, jobs: Option<usize>) -> Self {
+        let mut limits = Self::default();
+        if let Some(m) = memory {
+            limits.memory = m;
+            limits.memory_source = LimitSource::Explicit;
+        }
+        if let Some(j) = jobs {
+            limits.jobs = j.max(1);
+        }
+        limits
+    }
+
+    /// The limit and where it came from, for messages: `11.6 GiB (half of the 23.3 GiB
+    /// of physical memory)`.
+    pub fn describe(&self) -> String {
+        match self.memory_source {
+            LimitSource::Default { physical } => format!(
+                "{} (half of the {} of memory; raise it with --memory-limit SIZE, e.g. --memory-limit {}GiB)",
+                bytes(self.memory as f64),
+                bytes(physical as f64),
+                (physical as f64 / (1u64 << 30) as f64 * 0.8).max(1.0).round()
+            ),
+            LimitSource::Explicit => format!("{} (--memory-limit)", bytes(self.memory as f64)),
+        }
+    }
+}
+
+/// The memory this process may use (bytes): the physical memory (`MemTotal` of
+/// `/proc/meminfo`, else `sysconf`), or the control group's limit if lower (a batch
+/// job's allocation).
+pub fn physical_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("MemTotal:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+                .map(|kb| kb * 1024)
+        });
+    let physical = meminfo.or_else(|| {
+        // SAFETY: sysconf has no preconditions.
+        let (pages, size) = unsafe {
+            (
+                libc::sysconf(libc::_SC_PHYS_PAGES),
+                libc::sysconf(libc::_SC_PAGESIZE),
+            )
+        };
+        (pages > 0 && size > 0).then(|| pages as u64 * size as u64)
+    })?;
+    let cgroup = [
+        "/sys/fs/cgroup/memory.max",
+        "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+    ]
+    .iter()
+    .filter_map(|p| std::fs::read_to_string(p).ok())
+    .filter_map(|t| t.trim().parse::<u64>().ok())
+    .min();
+    Some(cgroup.map_or(physical, |c| c.min(physical)))
+}
+
+/// A size as people write it: `40GiB`, `40 GiB`, `512MiB`, `1.5T`, `2GB`, `1000000`
+/// (bytes). `K`/`M`/`G`/`T` alone and with `iB` are powers of 1024; `kB`/`MB`/`GB`/`TB`
+/// powers of 1000.
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let value: f64 = num.parse().map_err(|_| {
+        format!("`{text}` is not a size; expected a number with a unit, e.g. 40GiB or 512MiB")
+    })?;
+    let factor: f64 = match unit.trim() {
+        "" | "B" => 1.0,
+        "K" | "KiB" | "k" => 1024.0,
+        "M" | "MiB" => 1024f64.powi(2),
+        "G" | "GiB" => 1024f64.powi(3),
+        "T" | "TiB" => 1024f64.powi(4),
+        "kB" | "KB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        "TB" => 1e12,
+        other => {
+            return Err(format!(
+                "unknown unit `{other}` in `{text}`; expected B, KiB, MiB, GiB, TiB (or kB, MB, GB, TB)"
+            ))
+        }
+    };
+    let size = value * factor;
+    if !(size.is_finite() && size >= 1.0 && size < u64::MAX as f64) {
+        return Err(format!("`{text}` is not a usable memory size"));
+    }
+    Ok(size as u64)
+}
+
+/// `bytes` for people: `14.3 GiB`, `512 MiB`, `800 B`.
+pub fn bytes(bytes: f64) -> String {
+    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut v = bytes;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{v:.0} B")
+    } else if v < 10.0 {
+        format!("{v:.2} {}", UNITS[u])
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
+/// Reads the grid file at `path`, refusing one larger than [`MAX_GRID_BYTES`]
+/// (without reading more than that, so that `/dev/zero` is refused at once).
+pub fn read_capped(path: &Path) -> Result<String, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    if let Ok(m) = file.metadata() {
+        if m.is_dir() {
+            return Err("is a directory, not a grid file".into());
+        }
+        if m.is_file() && m.len() > MAX_GRID_BYTES {
+            return Err(too_large(Some(m.len())));
+        }
+    }
+    let mut bytes = Vec::new();
+    file.take(MAX_GRID_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read: {e}"))?;
+    if bytes.len() as u64 > MAX_GRID_BYTES {
+        return Err(too_large(None));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        format!(
+            "is not a text file (not UTF-8 at byte {}); a grid file is YAML text",
+            e.utf8_error().valid_up_to()
+        )
+    })
+}
+
+/// The refusal of a grid file of `len` bytes (`None`: a stream that went on past the cap).
+fn too_large(len: Option<u64>) -> String {
+    let size = match len {
+        Some(len) => format!("is {} ({len} bytes)", bytes(len as f64)),
+        None => format!(
+            "goes on past {} (a device or stream?)",
+            bytes(MAX_GRID_BYTES as f64)
+        ),
+    };
+    format!(
+        "{size}: larger than a grid file may be (at most {}); a grid describes its \
+         cases with axes, it does not list them",
+        bytes(MAX_GRID_BYTES as f64)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_in_binary_and_decimal_units() {
+        assert_eq!(parse_size("40GiB").unwrap(), 40 << 30);
+        assert_eq!(parse_size("40 GiB").unwrap(), 40 << 30);
+        assert_eq!(parse_size("512M").unwrap(), 512 << 20);
+        assert_eq!(parse_size("2GB").unwrap(), 2_000_000_000);
+        assert_eq!(parse_size("1.5K").unwrap(), 1536);
+        assert_eq!(parse_size("1000").unwrap(), 1000);
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("4 parsecs").is_err());
+        assert!(parse_size("0").is_err());
+    }
+
+    #[test]
+    fn a_billion_samples_need_far_more_than_a_terabyte_of_nothing() {
+        let shape = Shape {
+            samples: 1_000_000_001,
+            window: 999_000_000,
+            spectra: 3,
+            float32: false,
+            cases: 1,
+            references: 1,
+        };
+        let e = MemoryEstimate::of(shape, 2);
+        // 13 float64 series of 1e9 samples per worker and reference, at least.
+        assert!(e.total > 3.0 * 104e9, "{}", e.total);
+        assert!(e.dominated_by_samples());
+        let small = MemoryEstimate::of(
+            Shape {
+                samples: 2_501,
+                window: 2_000,
+                spectra: 3,
+                float32: false,
+                cases: 10_000_000,
+                references: 1,
+            },
+            2,
+        );
+        assert!(!small.dominated_by_samples());
+        assert!(small.case_table > 10_000_000.0 * 400.0);
+    }
+
+    #[test]
+    fn byte_counts_read_as_people_write_them() {
+        assert_eq!(bytes(800.0), "800 B");
+        assert_eq!(bytes(1536.0), "1.50 KiB");
+        assert_eq!(bytes(14.3 * (1u64 << 30) as f64), "14.3 GiB");
+    }
+}
