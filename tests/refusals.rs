@@ -7,7 +7,7 @@
 use std::fs::File;
 use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
 use studyrun::mechanism::{CaseParams, Location};
@@ -22,7 +22,7 @@ use studyrun::study::Study;
 const FAST: Duration = Duration::from_secs(5);
 
 fn studyrun(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_studyrun"))
+    crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
         .stdin(Stdio::null())
@@ -275,7 +275,7 @@ fn force_replaces_only_a_study_result() {
     let d = dir.path();
     write(d, "tiny.yaml", TINY);
     let fifo = d.join("pipe.h5");
-    assert!(Command::new("mkfifo")
+    assert!(crate::common::command("mkfifo")
         .arg(&fifo)
         .status()
         .unwrap()
@@ -712,7 +712,7 @@ fn a_full_or_closed_stderr_or_stdout_is_not_a_panic() {
     write(dir.path(), "tiny.yaml", TINY);
     let full = || File::options().write(true).open("/dev/full").unwrap();
     let run = |args: &[&str], stdout: File, stderr: File| {
-        Command::new(env!("CARGO_BIN_EXE_studyrun"))
+        crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
             .current_dir(dir.path())
             .args(args)
             .stdout(stdout)
