@@ -124,7 +124,7 @@ pub const ECCENTRICITY_SLACK: f64 = 1e-6;
 ///   diameter `D = (d_o − d_i)/2`: a contact deflection of a tenth of the ball is far
 ///   beyond elastic (Hertz) contact of steel; the load is too high for the bearing.
 ///
-/// The ideal mechanism has no bearing and is not checked.
+/// The ideal mechanism has no bearing and is not checked (docs/model.md §5.4).
 pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), String> {
     if params.location == Location::Ideal {
         return Ok(());
