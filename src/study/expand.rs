@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde_saphyr::Location;
 
-use super::config::{GridFile, Scalar, WavinessSection, S};
+use super::config::{GridFile, OutputSection, Scalar, SpectraSection, WavinessSection, S};
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
@@ -247,7 +247,9 @@ struct ResolvedAxis<'a> {
 }
 
 /// Builds the study from grid-file text, refusing it when its run would need more
-/// memory than `limits` allow (decided before the cases are expanded).
+/// memory than `limits` allow (decided before the cases are expanded). The steps:
+/// parse, sampling, effects and base case, solver, axes, case count, axis values,
+/// memory, expansion, references, analysed window, spectra and output settings.
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file: GridFile = serde_saphyr::from_str(text).map_err(|e| {
@@ -255,7 +257,44 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         ctx.err(place, &field, message)
     })?;
     check_name(&ctx, &file.name)?;
+    let sampling = sampling_of(&ctx, &file)?;
+    let effects = effects(&ctx, &file)?;
+    let mut prov = Provenance::new();
+    let base = base_case(&ctx, &file, &effects, &mut prov)?;
+    let solver = solver(&ctx, &file, &sampling)?;
+    let (groups, axes_names) = axis_groups(&ctx, &file)?;
+    let (total, count) = case_count(&ctx, &file, &groups)?;
+    let resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
+    check_repeats(&ctx, &resolved)?;
+    check_study_memory(&ctx, &file, &resolved, &sampling, total, limits)?;
+    let mut cases = Vec::with_capacity(total as usize);
+    expand_grid(&ctx, &base, &prov, &resolved, count, &effects, &mut cases)?;
+    expand_explicit(&ctx, &file, &base, &prov, &effects, &mut cases)?;
+    let references = assign_references(&mut cases);
+    let transient = transient_of(&ctx, &file, &sampling, &cases)?;
+    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
+    let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
+    Ok(Study {
+        name: file.name.value,
+        description: file.description.unwrap_or_default(),
+        source: text.to_string(),
+        path: path.to_path_buf(),
+        sampling,
+        solver,
+        effects,
+        transient,
+        window,
+        spectrum_channels,
+        float32,
+        compression,
+        axes: axes_names,
+        cases,
+        references,
+    })
+}
 
+/// `duration` and `sample_rate`, checked.
+fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, StudyError> {
     let sampling = Sampling {
         duration: ctx.quantity(&file.duration, Dimension::Time, "duration")?,
         sample_rate: ctx.quantity(&file.sample_rate, Dimension::Frequency, "sample_rate")?,
@@ -271,18 +310,16 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             e.allowed,
         )
     })?;
+    Ok(sampling)
+}
 
-    let effects = effects(&ctx, &file)?;
-    let mut prov = Provenance::new();
-    let base = base_case(&ctx, &file, &effects, &mut prov)?;
-    let solver = solver(&ctx, &file, &sampling)?;
-    let max_cases = file
-        .max_cases
-        .as_ref()
-        .map(|m| m.value)
-        .unwrap_or(DEFAULT_MAX_CASES);
-
-    // Axes: each grid axis is a group of one; zip groups vary together.
+/// The axes in groups (each grid axis a group of one; zip groups vary together) and
+/// their names in expansion order; refuses unequal zips, empty axes, an axis given
+/// twice and an empty study.
+fn axis_groups<'a>(
+    ctx: &Ctx<'_>,
+    file: &'a GridFile,
+) -> Result<(Vec<Vec<Axis<'a>>>, Vec<String>), StudyError> {
     let mut groups: Vec<Vec<Axis<'_>>> = file
         .grid
         .iter()
@@ -334,6 +371,21 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             "the study is empty: give `grid:` axes, `zip:` groups or `cases:`",
         ));
     }
+    Ok((groups, axes_names))
+}
+
+/// The number of cases in all and from the axes, refused above `max_cases` before
+/// anything is expanded.
+fn case_count(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    groups: &[Vec<Axis<'_>>],
+) -> Result<(u64, u64), StudyError> {
+    let max_cases = file
+        .max_cases
+        .as_ref()
+        .map(|m| m.value)
+        .unwrap_or(DEFAULT_MAX_CASES);
     let product = groups
         .iter()
         .try_fold(if groups.is_empty() { 0u64 } else { 1u64 }, |acc, g| {
@@ -341,23 +393,26 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         });
     let total = product.and_then(|p| p.checked_add(file.cases.len() as u64));
     match total {
-        Some(t) if t <= max_cases => {}
-        _ => {
-            return Err(ctx.err(
-                file.max_cases.as_ref().map(|m| at(&m.referenced)),
-                "grid",
-                format!(
-                    "the grid expands to {} cases, more than max_cases = {max_cases}; raise `max_cases` if you mean it",
-                    total.map_or("over 2^64".to_string(), |t| t.to_string())
-                ),
-            ))
-        }
+        Some(t) if t <= max_cases => Ok((t, product.unwrap_or(0))),
+        _ => Err(ctx.err(
+            file.max_cases.as_ref().map(|m| at(&m.referenced)),
+            "grid",
+            format!(
+                "the grid expands to {} cases, more than max_cases = {max_cases}; raise `max_cases` if you mean it",
+                total.map_or("over 2^64".to_string(), |t| t.to_string())
+            ),
+        )),
     }
-    let total = total.unwrap_or(0);
-    let count = product.unwrap_or(0);
+}
 
-    // Every axis value resolved once (units, effects, whole numbers), and no value twice.
-    let resolved: Vec<Vec<ResolvedAxis<'_>>> = groups
+/// Every axis value resolved once (units, effects, whole numbers).
+fn resolve_axes<'a>(
+    ctx: &Ctx<'_>,
+    base: &CaseParams,
+    groups: &'a [Vec<Axis<'_>>],
+    effects: &Effects,
+) -> Result<Vec<Vec<ResolvedAxis<'a>>>, StudyError> {
+    groups
         .iter()
         .map(|group| {
             group
@@ -369,7 +424,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
                         .enumerate()
                         .map(|(k, v)| {
                             let target =
-                                ctx.resolve(&base, name, v, &format!("{field}[{k}]"), &effects)?;
+                                ctx.resolve(base, name, v, &format!("{field}[{k}]"), effects)?;
                             Ok((target, at(&v.referenced)))
                         })
                         .collect::<Result<Vec<_>, StudyError>>()?;
@@ -380,11 +435,19 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
                 })
                 .collect::<Result<Vec<_>, StudyError>>()
         })
-        .collect::<Result<_, _>>()?;
-    check_repeats(&ctx, &resolved)?;
+        .collect()
+}
 
-    // Memory, before anything is expanded: the case count is known, the references
-    // are at most the combinations of the axes an ideal mechanism depends on.
+/// The memory check, before anything is expanded: the case count is known, and the
+/// references are at most the combinations of the axes an ideal mechanism depends on.
+fn check_study_memory(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    resolved: &[Vec<ResolvedAxis<'_>>],
+    sampling: &Sampling,
+    total: u64,
+    limits: &Limits,
+) -> Result<(), StudyError> {
     let references_bound = resolved
         .iter()
         .filter(|group| {
@@ -415,12 +478,21 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         cases: total,
         references: references_bound,
     };
-    check_memory(&ctx, &file, &MemoryEstimate::of(shape, limits.jobs), limits)?;
+    check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
+}
 
-    // Each case is the base with one value of every group (mixed radix over the
-    // groups, last group fastest), then the explicit `cases:` over the base. Where
-    // each value came from is only put together when a case is refused.
-    let mut cases = Vec::with_capacity(total as usize);
+/// The grid's `count` cases: each is the base with one value of every group (mixed
+/// radix over the groups, last group fastest). Where each value came from is only
+/// put together when a case is refused.
+fn expand_grid(
+    ctx: &Ctx<'_>,
+    base: &CaseParams,
+    prov: &Provenance,
+    resolved: &[Vec<ResolvedAxis<'_>>],
+    count: u64,
+    effects: &Effects,
+    cases: &mut Vec<Case>,
+) -> Result<(), StudyError> {
     let mut picks = vec![0usize; resolved.len()];
     for i in 0..count {
         let mut rest = i;
@@ -445,31 +517,57 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             }
             p
         };
-        cases.push(finish_case(&ctx, params, &effects, provenance, i)?);
+        cases.push(finish_case(ctx, params, effects, provenance, i)?);
     }
+    Ok(())
+}
+
+/// The explicit `cases:`, each over the base, after the grid's.
+fn expand_explicit(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    base: &CaseParams,
+    prov: &Provenance,
+    effects: &Effects,
+    cases: &mut Vec<Case>,
+) -> Result<(), StudyError> {
     for (c, explicit) in file.cases.iter().enumerate() {
         let mut params = base.clone();
         let mut case_prov = prov.clone();
         for (name, value) in &explicit.value {
             let field = format!("cases[{c}].{name}");
-            ctx.apply(&mut params, name, value, &field, &effects, &mut case_prov)?;
+            ctx.apply(&mut params, name, value, &field, effects, &mut case_prov)?;
         }
         let id = cases.len() as u64;
-        cases.push(finish_case(&ctx, params, &effects, || case_prov, id)?);
+        cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
     }
+    Ok(())
+}
 
-    // One reference per distinct ideal mechanism, found by hashing (not by comparing
-    // every case with every reference).
+/// One reference per distinct ideal mechanism, found by hashing (not by comparing
+/// every case with every reference); sets each case's `reference`.
+fn assign_references(cases: &mut [Case]) -> Vec<CaseParams> {
     let mut references: Vec<CaseParams> = Vec::new();
     let mut index: HashMap<ReferenceKey, usize> = HashMap::new();
-    for case in &mut cases {
+    for case in cases {
         let reference = reference_of(&case.params);
         case.reference = *index.entry(reference_key(&reference)).or_insert_with(|| {
             references.push(reference);
             references.len() - 1
         });
     }
+    references
+}
 
+/// The start of the analysed window (s): the grid's `transient`, or `auto` (one
+/// revolution at the slowest speed, at most half the duration); it must leave two
+/// samples for the spectra and metrics.
+fn transient_of(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+    cases: &[Case],
+) -> Result<f64, StudyError> {
     let min_rpm = cases
         .iter()
         .map(|c| c.params.rpm)
@@ -512,8 +610,16 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             ),
         ));
     }
+    Ok(transient)
+}
 
-    let spectra = file.spectra.unwrap_or_default();
+/// The spectrum window's name and the channels with spectra.
+fn spectra_settings(
+    ctx: &Ctx<'_>,
+    spectra: Option<&SpectraSection>,
+) -> Result<(String, Vec<&'static str>), StudyError> {
+    let default = SpectraSection::default();
+    let spectra = spectra.unwrap_or(&default);
     let window = match &spectra.window {
         None => "hann".to_string(),
         Some(w) if w.value == "hann" || w.value == "rectangular" => w.value.clone(),
@@ -528,7 +634,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             ))
         }
     };
-    let spectrum_channels = match &spectra.channels {
+    let channels = match &spectra.channels {
         None => vec!["slider_acceleration", "crank_moment", "bearing_force"],
         Some(list) => list
             .value
@@ -554,7 +660,16 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             })
             .collect::<Result<_, _>>()?,
     };
-    let output = file.output.unwrap_or_default();
+    Ok((window, channels))
+}
+
+/// Whether series and spectra are stored as float32, and the deflate level.
+fn output_settings(
+    ctx: &Ctx<'_>,
+    output: Option<&OutputSection>,
+) -> Result<(bool, u8), StudyError> {
+    let default = OutputSection::default();
+    let output = output.unwrap_or(&default);
     let float32 = match &output.dtype {
         None => false,
         Some(d) if d.value == "float64" => false,
@@ -579,24 +694,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             ))
         }
     };
-
-    Ok(Study {
-        name: file.name.value,
-        description: file.description.unwrap_or_default(),
-        source: text.to_string(),
-        path: path.to_path_buf(),
-        sampling,
-        solver,
-        effects,
-        transient,
-        window,
-        spectrum_channels,
-        float32,
-        compression,
-        axes: axes_names,
-        cases,
-        references,
-    })
+    Ok((float32, compression))
 }
 
 /// The ideal mechanism a case is compared with: same bodies, speed and gravity.
