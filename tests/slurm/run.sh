@@ -329,7 +329,7 @@ cat >"$tmp/tiny/study.yaml" <<'EOF'
 name: slurm_tiny
 description: the Slurm test's small study - two cases (one fails), three shards
 duration: 0.05
-sample_rate: 10000
+sample_rate: 1000
 transient: "0.01 s"
 solver: {method: rk4, step: "1 ms"}
 grid:
