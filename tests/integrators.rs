@@ -5,6 +5,7 @@
 //! Run with `cargo test --release --test integrators -- --nocapture` to see the
 //! measured numbers each test prints.
 
+use crate::common::VanDerPol;
 use studyrun::error::ModelError;
 use studyrun::solve::{integrate, Method, OdeSystem, SolveError, SolverSettings, Stats};
 
@@ -113,20 +114,6 @@ impl OdeSystem for StiffLinear {
         let l = self.lambda;
         dydt[0] = (-2.0 - l) * y[0] + (-2.0 - 2.0 * l) * y[1];
         dydt[1] = (1.0 + l) * y[0] + (1.0 + 2.0 * l) * y[1];
-        Ok(())
-    }
-}
-
-/// Van der Pol oscillator, `μ = 1`.
-struct VanDerPol;
-
-impl OdeSystem for VanDerPol {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
-        dydt[0] = y[1];
-        dydt[1] = (1.0 - y[0] * y[0]) * y[1] - y[0];
         Ok(())
     }
 }

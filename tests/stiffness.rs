@@ -13,6 +13,7 @@
 
 use std::time::Instant;
 
+use crate::common::VanDerPol;
 use crate::hard_cases::stiff_case;
 use studyrun::bearing::RaceWaviness;
 use studyrun::error::ModelError;
@@ -41,20 +42,6 @@ impl OdeSystem for Relaxation {
     }
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
         dydt[0] = LAMBDA * (y[0] - t.cos());
-        Ok(())
-    }
-}
-
-/// Van der Pol, μ = 1: a limit cycle of period ≈ 6.66, not stiff.
-struct VanDerPol;
-
-impl OdeSystem for VanDerPol {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
-        dydt[0] = y[1];
-        dydt[1] = (1.0 - y[0] * y[0]) * y[1] - y[0];
         Ok(())
     }
 }

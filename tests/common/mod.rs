@@ -6,6 +6,20 @@ pub mod hard;
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// The Van der Pol oscillator, `μ = 1`: a limit cycle of period ≈ 6.66, not stiff.
+pub struct VanDerPol;
+
+impl studyrun::solve::OdeSystem for VanDerPol {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), studyrun::ModelError> {
+        dydt[0] = y[1];
+        dydt[1] = (1.0 - y[0] * y[0]) * y[1] - y[0];
+        Ok(())
+    }
+}
+
 /// A command for `program` that starts with no descriptor of this process but the
 /// standard three. The tests run in one process: libhdf5 opens files without
 /// close-on-exec, and a child started while another test holds an HDF5 file open
