@@ -397,10 +397,16 @@ fn case_count(
         _ => Err(ctx.err(
             file.max_cases.as_ref().map(|m| at(&m.referenced)),
             "grid",
-            format!(
-                "the grid expands to {} cases, more than max_cases = {max_cases}; raise `max_cases` if you mean it",
-                total.map_or("over 2^64".to_string(), |t| t.to_string())
-            ),
+            match total {
+                Some(t) => format!(
+                    "the grid expands to {t} cases, more than max_cases = {max_cases}; their case \
+                     table alone would need about {} of memory; raise `max_cases` if you mean it",
+                    super::memory::bytes(t as f64 * super::memory::case_table_bytes())
+                ),
+                None => format!(
+                    "the grid expands to over 2^64 cases, more than max_cases = {max_cases}"
+                ),
+            },
         )),
     }
 }
@@ -821,8 +827,8 @@ fn check_memory(
             file.max_cases.as_ref().map(|m| at(&m.referenced)),
             "grid",
             format!(
-                "fewer cases ({} now: fewer axis values), or a run in shards on several \
-                 machines is no help here, since each holds the whole case table",
+                "fewer cases ({} now: fewer axis values); shards do not help, since every \
+                 shard holds the whole case table",
                 estimate.shape.cases
             ),
         )
