@@ -316,11 +316,18 @@ fn validate_command(grid: &Path, jobs: Option<u64>, memory_limit: Option<u64>) -
     let study = load(grid, &limits)?;
     let estimate = study.memory_estimate(limits.jobs);
     out!(
-        "{}: ok, {} cases ({} ideal references), axes: {}; memory about {} on {} workers (limit {})",
+        "{}: ok, {} cases ({} ideal references), axes: {}{}; memory about {} on {} workers (limit {})",
         grid.display(),
         study.cases.len(),
         study.references.len(),
         study.axes.join(", "),
+        study.design.as_ref().map_or(String::new(), |d| format!(
+            "; design: {} of {} samples ({} rows) over {}",
+            d.method.name(),
+            d.samples,
+            d.rows,
+            d.parameters.join(", ")
+        )),
         memory::bytes(estimate.total),
         limits.jobs,
         memory::bytes(limits.memory as f64)
@@ -431,12 +438,13 @@ fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
         None => (0..study.cases.len()).collect(),
     };
     let mut header = vec!["case".to_string()];
-    header.extend(study.axes.iter().cloned());
+    let varied = study.varied();
+    header.extend(varied.iter().map(|v| v.to_string()));
     out!("{}", header.join("\t"))?;
     for &r in &rows {
         let c = &study.cases[r];
         let mut line = vec![c.id.to_string()];
-        for axis in &study.axes {
+        for axis in &varied {
             line.push(match lookup(axis) {
                 Some(p) => format!("{}", p.get(&c.params)),
                 None => c.params.location.to_string(),
@@ -593,7 +601,7 @@ fn accuracy_command(
     for r in &refs {
         let c = &study.cases[r.case];
         let labels: Vec<String> = study
-            .axes
+            .varied()
             .iter()
             .map(|a| match lookup(a) {
                 Some(p) => format!("{a}={}", p.get(&c.params)),

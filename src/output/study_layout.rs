@@ -66,6 +66,16 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
                 .collect(),
         ),
     });
+    if let Some(d) = &study.design {
+        parameters.push(Param {
+            spec: VarSpec::new(
+                "design_row",
+                "1",
+                "row of the sampled design (global attribute design_method) this case runs",
+            ),
+            values: ParamValues::F64(cases.iter().map(|c| (c.id % d.rows) as f64).collect()),
+        });
+    }
     let reference_parameters = vec![Param {
         spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
         values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
@@ -116,6 +126,19 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             StudyFingerprint::of(study, None).hex().into(),
         ),
     ]);
+    if let Some(d) = &study.design {
+        attributes.extend([
+            ("design_method".to_string(), d.method.name().into()),
+            ("design_samples".to_string(), (d.samples as i64).into()),
+            ("design_seed".to_string(), (d.seed as i64).into()),
+            ("design_scrambled".to_string(), i64::from(d.scramble).into()),
+            ("design_rows".to_string(), (d.rows as i64).into()),
+            (
+                "design_parameters".to_string(),
+                d.parameters.join(",").into(),
+            ),
+        ]);
+    }
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.sampling.times(),

@@ -81,6 +81,42 @@ pub struct GridFile {
     /// Explicit extra cases: parameter → value, over the base.
     #[serde(default)]
     pub cases: Vec<S<IndexMap<String, S<Scalar>>>>,
+    /// A sampled design, repeated at every grid point and explicit case.
+    #[serde(default)]
+    pub design: Option<S<DesignSection>>,
+}
+
+/// `design:`: points drawn over parameter ranges (see [`crate::study::design`]).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignSection {
+    /// `lhs`, `sobol`, `saltelli` or `random`.
+    pub method: S<String>,
+    /// Base points `N` (Saltelli: `N (2D + 2)` rows).
+    pub samples: S<u64>,
+    /// Generator seed (default 0).
+    #[serde(default)]
+    pub seed: Option<S<u64>>,
+    /// Scramble the Sobol points (default `true`; `sobol` and `saltelli` only).
+    #[serde(default)]
+    pub scramble: Option<S<bool>>,
+    /// Parameter → its range, distribution or choices, in design-column order.
+    pub parameters: S<IndexMap<String, S<DesignParameter>>>,
+}
+
+/// One design parameter: `min` and `max` (with `scale: linear | log`), `mean` and
+/// `sd` (normal), or `choices`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct DesignParameter {
+    pub min: Option<S<Scalar>>,
+    pub max: Option<S<Scalar>>,
+    /// `linear` (default) or `log` (log-uniform between `min` and `max`).
+    pub scale: Option<S<String>>,
+    pub mean: Option<S<Scalar>>,
+    pub sd: Option<S<Scalar>>,
+    pub choices: Option<S<Vec<S<Scalar>>>>,
 }
 
 /// `mechanism:` overrides (each optional).

@@ -10,6 +10,8 @@ use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
 use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
+
+mod design;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site};
@@ -263,13 +265,36 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let base = base_case(&ctx, &file, &effects, &mut prov)?;
     let solver = solver(&ctx, &file, &sampling)?;
     let (groups, axes_names) = axis_groups(&ctx, &file)?;
-    let (total, count) = case_count(&ctx, &file, &groups)?;
-    let resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
+    let rows = design::rows(&ctx, &file)?;
+    let (total, count) = case_count(&ctx, &file, &groups, rows)?;
+    let sampled = design::resolve(&ctx, &file, &base, &effects, &axes_names)?;
+    let mut resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
     check_repeats(&ctx, &resolved)?;
-    check_study_memory(&ctx, &file, &resolved, &sampling, total, limits)?;
+    let design_values = sampled.as_ref().map_or(0, |d| d.values());
+    check_study_memory(
+        &ctx,
+        &file,
+        &resolved,
+        &sampling,
+        total,
+        design_values,
+        limits,
+    )?;
+    if let Some(d) = &sampled {
+        resolved.push(d.group());
+    }
     let mut cases = Vec::with_capacity(total as usize);
     expand_grid(&ctx, &base, &prov, &resolved, count, &effects, &mut cases)?;
-    expand_explicit(&ctx, &file, &base, &prov, &effects, &mut cases)?;
+    let explicit_design = sampled.as_ref().map(|_| &resolved[resolved.len() - 1]);
+    expand_explicit(
+        &ctx,
+        &file,
+        &base,
+        &prov,
+        explicit_design,
+        &effects,
+        &mut cases,
+    )?;
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
@@ -290,6 +315,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         axes: axes_names,
         cases,
         references,
+        design: sampled.map(|d| d.info),
     })
 }
 
@@ -364,11 +390,11 @@ fn axis_groups<'a>(
             axes_names.push((*name).clone());
         }
     }
-    if groups.is_empty() && file.cases.is_empty() {
+    if groups.is_empty() && file.cases.is_empty() && file.design.is_none() {
         return Err(ctx.err(
             None,
             "grid",
-            "the study is empty: give `grid:` axes, `zip:` groups or `cases:`",
+            "the study is empty: give `grid:` axes, `zip:` groups, `cases:` or a `design:`",
         ));
     }
     Ok((groups, axes_names))
@@ -380,18 +406,27 @@ fn case_count(
     ctx: &Ctx<'_>,
     file: &GridFile,
     groups: &[Vec<Axis<'_>>],
+    design_rows: u64,
 ) -> Result<(u64, u64), StudyError> {
     let max_cases = file
         .max_cases
         .as_ref()
         .map(|m| m.value)
         .unwrap_or(DEFAULT_MAX_CASES);
+    // Without axes the grid has no point, unless a design stands alone on the base.
+    let alone = file.design.is_some() && file.cases.is_empty();
+    let empty = if groups.is_empty() && !alone { 0 } else { 1 };
     let product = groups
         .iter()
-        .try_fold(if groups.is_empty() { 0u64 } else { 1u64 }, |acc, g| {
+        .try_fold(empty, |acc: u64, g| {
             acc.checked_mul(g[0].1.value.len() as u64)
-        });
-    let total = product.and_then(|p| p.checked_add(file.cases.len() as u64));
+        })
+        .and_then(|p| p.checked_mul(design_rows));
+    let total = product.and_then(|p| {
+        (file.cases.len() as u64)
+            .checked_mul(design_rows)
+            .and_then(|c| p.checked_add(c))
+    });
     match total {
         Some(t) if t <= max_cases => Ok((t, product.unwrap_or(0))),
         _ => Err(ctx.err(
@@ -452,6 +487,7 @@ fn check_study_memory(
     resolved: &[Vec<ResolvedAxis<'_>>],
     sampling: &Sampling,
     total: u64,
+    design_values: u64,
     limits: &Limits,
 ) -> Result<(), StudyError> {
     let references_bound = resolved
@@ -483,6 +519,7 @@ fn check_study_memory(
             .is_some_and(|d| d.value == "float32"),
         cases: total,
         references: references_bound,
+        design_values,
     };
     check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
 }
@@ -528,24 +565,34 @@ fn expand_grid(
     Ok(())
 }
 
-/// The explicit `cases:`, each over the base, after the grid's.
+/// The explicit `cases:`, each over the base, after the grid's; with a design,
+/// each explicit case once per design row (the design's group, rows fastest).
 fn expand_explicit(
     ctx: &Ctx<'_>,
     file: &GridFile,
     base: &CaseParams,
     prov: &Provenance,
+    design: Option<&Vec<ResolvedAxis<'_>>>,
     effects: &Effects,
     cases: &mut Vec<Case>,
 ) -> Result<(), StudyError> {
+    let rows = design.map_or(1, |g| g[0].values.len());
     for (c, explicit) in file.cases.iter().enumerate() {
-        let mut params = base.clone();
-        let mut case_prov = prov.clone();
-        for (name, value) in &explicit.value {
-            let field = format!("cases[{c}].{name}");
-            ctx.apply(&mut params, name, value, &field, effects, &mut case_prov)?;
+        for row in 0..rows {
+            let mut params = base.clone();
+            let mut case_prov = prov.clone();
+            for axis in design.into_iter().flatten() {
+                let (target, place) = axis.values[row];
+                target.set(&mut params);
+                case_prov.push((target.name(), format!("{}[{row}]", axis.field), place));
+            }
+            for (name, value) in &explicit.value {
+                let field = format!("cases[{c}].{name}");
+                ctx.apply(&mut params, name, value, &field, effects, &mut case_prov)?;
+            }
+            let id = cases.len() as u64;
+            cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
         }
-        let id = cases.len() as u64;
-        cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
     }
     Ok(())
 }

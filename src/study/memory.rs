@@ -31,6 +31,9 @@ pub const MAX_JOBS: usize = 1024;
 
 /// Memory of the program itself: code, the HDF5 library, allocator arenas (bytes).
 const FIXED_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+/// One design value while a study expands: the unit draw and the resolved value
+/// with its place in the grid file.
+const DESIGN_VALUE_BYTES: f64 = 8.0 + 40.0;
 /// Per worker beyond its case's data: thread stack, deflate state, FFT twiddles.
 const WORKER_BYTES: f64 = 4.0 * 1024.0 * 1024.0;
 
@@ -75,6 +78,8 @@ pub struct Shape {
     pub cases: u64,
     /// Ideal references (an upper bound before expansion).
     pub references: u64,
+    /// Values a sampled design holds while the study is expanded (rows × parameters).
+    pub design_values: u64,
 }
 
 /// The memory a run of a study needs at its peak, by part (bytes).
@@ -121,7 +126,8 @@ impl MemoryEstimate {
         let per_case = series + analysis + record + scratch;
         let queued = (2.0 * jobs_f + 1.0) * record;
         let references = shape.references as f64 * series;
-        let case_table = shape.cases as f64 * case_table_bytes();
+        let case_table = shape.cases as f64 * case_table_bytes()
+            + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
         Self {
@@ -397,6 +403,7 @@ mod tests {
             float32: false,
             cases: 1,
             references: 1,
+            design_values: 0,
         };
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
@@ -410,6 +417,7 @@ mod tests {
                 float32: false,
                 cases: 10_000_000,
                 references: 1,
+                design_values: 0,
             },
             2,
         );

@@ -10,6 +10,7 @@
 //! Errors name the file, line, column, field and reason.
 
 pub mod config;
+pub mod design;
 mod expand;
 pub mod memory;
 pub mod params;
@@ -104,6 +105,39 @@ pub struct Study {
     pub cases: Vec<Case>,
     /// Distinct ideal mechanisms (one per speed and body set) the cases compare with.
     pub references: Vec<CaseParams>,
+    /// The sampled design, when the grid file has one.
+    pub design: Option<DesignInfo>,
+}
+
+/// A study's sampled design (`design:`), as the study file records it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DesignInfo {
+    /// How the points were drawn.
+    pub method: design::Method,
+    /// Base points `N`.
+    pub samples: u64,
+    /// The generator's seed.
+    pub seed: u64,
+    /// Whether the Sobol points were scrambled.
+    pub scramble: bool,
+    /// The design's parameters, in column order.
+    pub parameters: Vec<String>,
+    /// Rows per grid point and explicit case (`N`, or `N (2D + 2)` for Saltelli).
+    pub rows: u64,
+}
+
+impl Study {
+    /// The design row of case `id`: the design repeats at every grid point and
+    /// explicit case, its rows fastest. `None` without a design.
+    pub fn design_row(&self, id: u64) -> Option<u64> {
+        self.design.as_ref().map(|d| id % d.rows)
+    }
+
+    /// The parameters that vary between cases: the grid's axes, then the design's.
+    pub fn varied(&self) -> Vec<&str> {
+        let design = self.design.iter().flat_map(|d| &d.parameters);
+        self.axes.iter().chain(design).map(String::as_str).collect()
+    }
 }
 
 impl Study {
@@ -147,6 +181,10 @@ impl Study {
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
+                design_values: self
+                    .design
+                    .as_ref()
+                    .map_or(0, |d| d.rows * d.parameters.len() as u64),
             },
             jobs,
         )
