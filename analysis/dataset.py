@@ -133,31 +133,34 @@ def make_splits(ds, channels, length, hop, labels=("location",), parameters=None
 
     classes = {n: np.unique(ds[n].values) for n in labels if ds[n].dtype.kind in "USO"}
     ok = np.flatnonzero(ds["status"].values == 1) if "status" in ds else np.arange(ds.sizes["case"])
-    ids = ds["case"].values
-    position = {int(i): k for k, i in enumerate(ids)}
     mask = analysis_window(ds) if analysed_only else np.ones(ds.sizes["time"], dtype=bool)
     time_index = np.flatnonzero(mask)
     per_series = window_count(time_index.size, length, hop)
     starts = time_index[0] + hop * np.arange(per_series) if per_series else np.empty(0, dtype=int)
 
+    # Each chosen variable read once, for the ok cases: series [cases, channels, samples].
+    sub = ds.isel(case=ok)
+    ids = sub["case"].values
+    series = np.stack([sub[c].values[:, mask] for c in channels], axis=1)
+    nan_cases = ids[np.isnan(series).any(axis=(1, 2))]
+    if nan_cases.size:
+        raise ValueError(f"the channels {channels} hold NaN in cases {nan_cases.tolist()} "
+                         "(ideal cases without a bearing?); select the cases first")
+    case_labels = {n: sub[n].values for n in labels}
+    case_params = np.column_stack([sub[p].values.astype(float) for p in parameters]) if parameters else \
+        np.empty((ids.size, 0))
+    position = {int(i): k for k, i in enumerate(ids)}
+
     out = {}
-    for name, cases in split_cases(ids[ok], fractions, seed).items():
+    for name, cases in split_cases(ids, fractions, seed).items():
         rows = np.array([position[int(c)] for c in cases], dtype=int)
-        series = np.stack([ds[c].values[rows][:, mask] for c in channels], axis=1) if rows.size else \
-            np.empty((0, len(channels), time_index.size))
-        nan_rows = np.flatnonzero(np.isnan(series).any(axis=(1, 2)))
-        if nan_rows.size:
-            raise ValueError(f"the channels {channels} hold NaN in cases {cases[nan_rows].tolist()} "
-                             "(failed, or ideal cases without a bearing?); select the cases first")
-        # [cases, channels, windows, L] -> [cases, windows, channels, L] -> [cases*windows, channels, L]
-        x = windows(series, length, hop).transpose(0, 2, 1, 3).reshape(-1, len(channels), length).astype(dtype)
-        repeat = lambda values: np.repeat(values, per_series, axis=0)  # noqa: E731  (case rows -> window rows)
-        label_values = {n: repeat(ds[n].values[rows]) for n in labels}
+        # [cases, channels, windows, L] -> [cases, windows, channels, L] -> [cases * windows, channels, L]
+        x = windows(series[rows], length, hop).transpose(0, 2, 1, 3).reshape(-1, len(channels), length)
+        label_values = {n: np.repeat(v[rows], per_series) for n, v in case_labels.items()}
         codes = {n: np.searchsorted(classes[n], label_values[n]).astype(np.int64) for n in classes}
-        params = np.column_stack([ds[p].values[rows].astype(float) for p in parameters]) if parameters else \
-            np.empty((rows.size, 0))
-        out[name] = WindowSet(x, repeat(cases), np.tile(starts, rows.size), label_values, codes, classes,
-                              repeat(params), parameters, channels)
+        out[name] = WindowSet(x.astype(dtype), np.repeat(cases, per_series), np.tile(starts, rows.size),
+                              label_values, codes, classes, np.repeat(case_params[rows], per_series, axis=0),
+                              parameters, channels)
     return out
 
 

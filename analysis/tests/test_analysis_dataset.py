@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 from analysis.dataset import SPLITS, make_splits, split_cases, torch_dataset, window_count, windows
-from analysis.studyfile import analysis_window, open_shards, select_cases
+from analysis.studyfile import analysis_window, open_shards, open_study, select_cases
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -193,8 +193,6 @@ def test_smoke_study_windows(smoke):
 
 
 def test_shards_split_as_the_merged_file(shard_paths, merged_path):
-    from analysis.studyfile import open_study
-
     with open_shards(shard_paths, lazy=False) as shards, open_study(merged_path) as merged:
         a = make_splits(shards, ["slider_acceleration"], 200, 100, seed=9)
         b = make_splits(merged, ["slider_acceleration"], 200, 100, seed=9)
