@@ -19,17 +19,16 @@ part x_i explains alone) and ST_i = E[Var(Y | x_~i)] / Var(Y) (alone and through
 its interactions). An additive metric has Σ S_i = 1 and S_i = ST_i; Σ S_i < 1
 measures the interactions.
 
-ASSUMED FILE LAYOUT OF A SALTELLI DESIGN (studyrun does not write one yet; this is
-what `study_saltelli` reads, to be kept in step with the engine when it does):
-  - root attribute `design_method` = "saltelli" and `design_parameters` = the design's
+File layout of a Saltelli design (`design: {method: saltelli}` in the grid file;
+docs/result-file.md), what `study_saltelli` reads:
+  - root attributes `design_method` = "saltelli" and `design_parameters` = the design's
     parameter names, comma-separated, in the order of the sample matrix's columns;
   - optional root attribute `design_second_order` (0 or 1, default 1): whether the
-    design has SALib's N(2D + 2) rows (with second order) or N(D + 2) rows;
-  - one per-case variable per design parameter (the existing `[case]` parameter
-    variable of that name, in the file's units) holding the case's design value;
-  - the cases, ordered by case id, are the rows of SALib's sample matrix in SALib's
-    order (`SALib.sample.sobol.sample`): per base row A, then AB_1 … AB_D, then
-    BA_1 … BA_D (second order only), then B.
+    design has SALib's N(2D + 2) rows (studyrun's) or N(D + 2) rows;
+  - one per-case variable per design parameter (the `[case]` parameter variable of
+    that name, in the file's units) holding the case's design value;
+  - the cases at one grid point, ordered by case id, are the rows of SALib's sample
+    matrix in SALib's order: per base row A, then AB_1 … AB_D, then BA_1 … BA_D, then B.
   A design repeated at every grid point is analysed one grid point at a time
   (`--select` the point). `study_saltelli` checks the rows have the Saltelli
   structure (AB_j equals A but in column j, where it equals B) before analysing, so a
@@ -210,7 +209,7 @@ def study_grid(ds, metric):
 
 def study_saltelli(ds, metric, resamples=1000, conf_level=0.95, seed=0):
     """`saltelli_indices` of the study's `metric` from the study's Saltelli design (the
-    layout assumed in this module's docstring): the parameters named by `design_parameters`,
+    layout in this module's docstring): the parameters named by `design_parameters`,
     their per-case values as the sample matrix and the cases in case-id order."""
     if str(ds.attrs.get("design_method", "")) != "saltelli":
         raise ValueError("the file has no Saltelli design (root attribute design_method is not 'saltelli')")

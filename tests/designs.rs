@@ -158,6 +158,8 @@ fn a_million_design_points_expand_within_the_memory_bound() {
     assert_eq!(study.cases.len(), 1_000_000);
     let estimate = study.memory_estimate(1);
     drop(study);
+    // Reaped by wait4 below, which also reports its peak memory.
+    #[allow(clippy::zombie_processes)]
     let child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir.path())
         .args(["validate", "many.yaml", "-j", "1"])

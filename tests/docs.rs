@@ -11,8 +11,8 @@ use std::path::Path;
 
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
-    BearingSection, GeometrySection, GridFile, HarmonicSection, MechanismSection, OutputSection,
-    SolverSection, SpectraSection, WavinessSection,
+    BearingSection, DesignParameter, DesignSection, GeometrySection, GridFile, HarmonicSection,
+    MechanismSection, OutputSection, SolverSection, SpectraSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -239,6 +239,8 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<SolverSection>("solver."));
     expected.extend(keys_of::<SpectraSection>("spectra."));
     expected.extend(keys_of::<OutputSection>("output."));
+    expected.extend(keys_of::<DesignSection>("design."));
+    expected.extend(keys_of::<DesignParameter>("design.parameters.*."));
     assert!(expected.contains("bearing.waviness.amplitude") && expected.contains("zip"));
 
     let doc = grid_file_doc();

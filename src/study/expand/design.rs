@@ -286,7 +286,7 @@ fn column(
         } => {
             let (p, min) = scalar(lo, "min")?;
             let (_, max) = scalar(hi, "max")?;
-            if !(min < max) {
+            if min >= max {
                 return Err(ctx.err(
                     Some(at(&hi.referenced)),
                     &format!("{field}.max"),
@@ -345,7 +345,7 @@ fn column(
         } => {
             let (p, mean) = scalar(m, "mean")?;
             let sd = ctx.quantity(s, p.dimension, &format!("{field}.sd"))?;
-            if p.integer || !(sd > 0.0) {
+            if p.integer || sd <= 0.0 {
                 return Err(ctx.err(
                     Some(at(&s.referenced)),
                     &format!("{field}.sd"),
