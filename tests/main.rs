@@ -11,6 +11,7 @@ mod convergence;
 mod damaged_files;
 mod docs;
 mod energy;
+mod envelope;
 mod events;
 mod grid;
 mod hard_cases;
