@@ -10,7 +10,8 @@ use studyrun::study::Study;
 
 const BASE: &str = "name: env\nduration: 0.1\nsample_rate: 10000\ntransient: \"0.02 s\"\ngrid:\n  location: [ideal, crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  rpm: [600]\n";
 
-const ENVELOPE: &str = "envelope:\n  channels: [bearing_force, crank_moment]\n  band: [\"1 kHz\", \"4 kHz\"]\n";
+const ENVELOPE: &str =
+    "envelope:\n  channels: [bearing_force, crank_moment]\n  band: [\"1 kHz\", \"4 kHz\"]\n";
 
 fn run(dir: &Path, name: &str, text: &str) -> StudyReader {
     let grid = dir.join(format!("{name}.yaml"));
@@ -38,7 +39,9 @@ fn without_envelope_nothing_is_stored_and_the_rest_is_bit_identical() {
         .chain(&lp.spectra)
         .map(|s| s.name.as_str())
         .collect();
-    for bad in ["envelope", "kurtosis", "ftf", "bpfo", "bpfi", "bsf", "crest"] {
+    for bad in [
+        "envelope", "kurtosis", "ftf", "bpfo", "bpfi", "bsf", "crest",
+    ] {
         assert!(!names.iter().any(|n| n.contains(bad)), "{bad} in {names:?}");
     }
     assert!(plain.attribute("envelope_band").is_none());

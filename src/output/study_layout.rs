@@ -1,11 +1,9 @@
 //! The study file's [`Layout`] for a study (or a shard of it).
 
 use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
-use crate::signal::envelope::{
-    kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings,
-};
-use crate::signal::{envelope_spectrum_specs, metric_specs};
+use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
+use crate::signal::{envelope_spectrum_specs, metric_specs};
 use crate::simulate::CHANNELS;
 use crate::study::params::PARAMETERS;
 use crate::study::Shard;

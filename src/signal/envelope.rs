@@ -100,11 +100,7 @@ pub fn kurtogram_bands(sample_rate: f64, depth: u32) -> Vec<(f64, Band)> {
     level(0.0, 1, &mut bands);
     for k in 1..=depth {
         if k >= 2 {
-            level(
-                (k - 1) as f64 + 3f64.log2() - 1.0,
-                3 << (k - 2),
-                &mut bands,
-            );
+            level((k - 1) as f64 + 3f64.log2() - 1.0, 3 << (k - 2), &mut bands);
         }
         level(k as f64, 1 << k, &mut bands);
     }
@@ -430,7 +426,11 @@ pub(crate) mod tests {
         };
         let env = plan.analyse(&x, BandChoice::Fixed(band)).unwrap();
         let (k1, k2) = (20, 40);
-        assert!((env.spectrum[k1] - 2.0 * m).abs() < 1e-12, "{}", env.spectrum[k1]);
+        assert!(
+            (env.spectrum[k1] - 2.0 * m).abs() < 1e-12,
+            "{}",
+            env.spectrum[k1]
+        );
         assert!(
             (env.spectrum[k2] - m * m / 2.0).abs() < 1e-12,
             "{}",
@@ -541,11 +541,7 @@ pub(crate) mod tests {
         let levels: Vec<f64> = bands.iter().map(|b| b.0).collect();
         assert!(levels.windows(2).all(|w| w[0] <= w[1]), "{levels:?}");
         for level in [1.0, 3f64.log2(), 2.0, 1.0 + 3f64.log2(), 3.0] {
-            let at: Vec<Band> = bands
-                .iter()
-                .filter(|b| b.0 == level)
-                .map(|b| b.1)
-                .collect();
+            let at: Vec<Band> = bands.iter().filter(|b| b.0 == level).map(|b| b.1).collect();
             assert_eq!(at[0].low, 0.0);
             assert_eq!(at.last().unwrap().high, 500.0);
             assert!(at.windows(2).all(|w| w[0].high == w[1].low));

@@ -29,8 +29,7 @@ impl Indicators {
     pub fn of(samples: &[f64]) -> Self {
         let n = samples.len() as f64;
         let mean = samples.iter().sum::<f64>() / n;
-        let (mut s1, mut s2, mut s3, mut s4, mut sq, mut peak) =
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
+        let (mut s1, mut s2, mut s3, mut s4, mut sq, mut peak) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
         for &x in samples {
             let y = x - mean;
             let a = y.abs();
@@ -96,7 +95,7 @@ pub const BAND_HALF_WIDTH_BINS: f64 = 1.5;
 /// `h = max(0.02 f, 1.5 Δf)`: `Σ A_k² / 3`, the sum of squared amplitudes over twice
 /// the Hann window's equivalent noise bandwidth (1.5 bins), so that a line of
 /// amplitude `A` on a bin reads its power `A²/2`. NaN when `f` is NaN.
-pub fn band_power(amplitude: &[f64], freqs: &[f64], f: f64) -> f64 {
+pub fn band_energy(amplitude: &[f64], freqs: &[f64], f: f64) -> f64 {
     if f.is_nan() {
         return f64::NAN;
     }
@@ -132,9 +131,17 @@ mod tests {
         assert!((i.rms - a / SQRT_2).abs() < 1e-12, "rms {}", i.rms);
         assert!((i.kurtosis - 1.5).abs() < 1e-12, "kurtosis {}", i.kurtosis);
         assert!(i.skewness.abs() < 1e-12, "skewness {}", i.skewness);
-        assert!((i.crest_factor - SQRT_2).abs() < 1.2e-3, "crest {}", i.crest_factor);
+        assert!(
+            (i.crest_factor - SQRT_2).abs() < 1.2e-3,
+            "crest {}",
+            i.crest_factor
+        );
         let shape = PI / (2.0 * SQRT_2);
-        assert!((i.shape_factor / shape - 1.0).abs() < 3e-4, "shape {}", i.shape_factor);
+        assert!(
+            (i.shape_factor / shape - 1.0).abs() < 3e-4,
+            "shape {}",
+            i.shape_factor
+        );
         assert!((i.impulse_factor / (PI / 2.0) - 1.0).abs() < 1e-3);
     }
 
@@ -151,7 +158,7 @@ mod tests {
     }
 
     #[test]
-    fn band_power_of_an_on_bin_line_is_its_power() {
+    fn band_energy_of_an_on_bin_line_is_its_power() {
         let (n, rate) = (1000, 1000.0);
         let freqs = frequencies(n, rate);
         let x: Vec<f64> = (0..n)
@@ -160,11 +167,11 @@ mod tests {
         let mut plan = SpectrumPlan::new(n, Window::Hann).unwrap();
         let mut amp = vec![0.0; plan.bins()];
         plan.amplitude(&x, &mut amp).unwrap();
-        let p = band_power(&amp, &freqs, 100.0);
+        let p = band_energy(&amp, &freqs, 100.0);
         assert!((p - 0.49 / 2.0).abs() < 1e-12, "{p}");
         // Around 97 Hz the band is 95.06..98.94 Hz (h = 2 % of 97 Hz): the line's Hann
         // lobe, 99..101 Hz, is outside it.
-        assert!(band_power(&amp, &freqs, 97.0).abs() < 1e-20);
-        assert!(band_power(&amp, &freqs, f64::NAN).is_nan());
+        assert!(band_energy(&amp, &freqs, 97.0).abs() < 1e-20);
+        assert!(band_energy(&amp, &freqs, f64::NAN).is_nan());
     }
 }

@@ -16,7 +16,7 @@ use crate::output::VarSpec;
 use crate::simulate::{CaseOutput, CHANNELS};
 use envelope::{EnvelopePlan, EnvelopeSettings};
 use fault_frequencies::FaultFrequencies;
-use indicators::{band_power, Indicators, INDICATOR_NAMES};
+use indicators::{band_energy, Indicators, INDICATOR_NAMES};
 use metrics::{vibration_metrics, Deviation};
 use spectrum::{frequencies, SpectrumError, SpectrumPlan};
 
@@ -83,9 +83,9 @@ pub fn metric_specs(envelope: Option<&EnvelopeSettings>) -> Vec<VarSpec> {
         specs.extend(envelope_metric_specs(settings));
     }
     specs.extend([VarSpec::new(
-            "wall_time",
-            "s",
-            "wall-clock time of the case (integration, sampling, spectra)",
+        "wall_time",
+        "s",
+        "wall-clock time of the case (integration, sampling, spectra)",
     )]);
     specs
 }
@@ -106,7 +106,9 @@ pub fn units_power(units: &str, p: i32) -> String {
             let e: i32 = if exponent.is_empty() {
                 1
             } else {
-                exponent.parse().expect("channel units are symbols with integer powers")
+                exponent
+                    .parse()
+                    .expect("channel units are symbols with integer powers")
             };
             format!("{symbol}{}", e * p)
         })
@@ -137,7 +139,10 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
             specs.push(VarSpec::new(
                 format!("{ch}_{name}"),
                 if dimensional { units } else { "1" },
-                format!("{} of {ch} (mean removed) over the analysed window", name.replace('_', " ")),
+                format!(
+                    "{} of {ch} (mean removed) over the analysed window",
+                    name.replace('_', " ")
+                ),
             ));
         }
         specs.extend([
@@ -154,7 +159,9 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
             VarSpec::new(
                 format!("{ch}_envelope_band_kurtosis"),
                 "1",
-                format!("kurtosis <|z|^4>/<|z|^2>^2 - 2 of the analytic signal of {ch} in that band"),
+                format!(
+                    "kurtosis <|z|^4>/<|z|^2>^2 - 2 of the analytic signal of {ch} in that band"
+                ),
             ),
         ]);
         for band in ENVELOPE_BANDS {
@@ -239,7 +246,7 @@ impl EnvelopeAnalysis {
             let env = self.plan.analyse(series, self.settings.band)?;
             metrics.extend(Indicators::of(series).values());
             metrics.extend([env.band.low, env.band.high, env.band_kurtosis]);
-            metrics.extend(lines.map(|f| band_power(&env.spectrum, &self.freqs, f)));
+            metrics.extend(lines.map(|f| band_energy(&env.spectrum, &self.freqs, f)));
             spectra.push(env.spectrum);
             spectra.push(env.spectral_kurtosis);
         }

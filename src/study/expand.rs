@@ -6,8 +6,7 @@ use std::path::Path;
 use serde_saphyr::Location;
 
 use super::config::{
-    BandValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection, WavinessSection,
-    S,
+    BandValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection, WavinessSection, S,
 };
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};

@@ -148,10 +148,7 @@ impl Study {
                 samples: self.sampling.len() as u64,
                 window: self.analysis_window().len() as u64,
                 spectra: self.spectrum_channels.len()
-                    + self
-                        .envelope
-                        .as_ref()
-                        .map_or(0, |e| 2 * e.channels.len()),
+                    + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
