@@ -139,6 +139,8 @@ pub struct EnvelopePlan {
     freqs: Vec<f64>,
     forward: Arc<dyn RealToComplex<f64>>,
     inverse: Arc<dyn Fft<f64>>,
+    /// Plans of the kurtogram's short autocorrelation FFTs (cached by length).
+    planner: FftPlanner<f64>,
     hann: SpectrumPlan,
     /// The kurtogram's bands for this `n`.
     bands: Vec<(f64, Band)>,
@@ -150,6 +152,8 @@ pub struct EnvelopePlan {
     real_scratch: Vec<Complex<f64>>,
     analytic: Vec<Complex<f64>>,
     complex_scratch: Vec<Complex<f64>>,
+    /// A band's bins, then their autocorrelation.
+    lags: Vec<Complex<f64>>,
     squared: Vec<f64>,
 }
 
@@ -166,7 +170,8 @@ impl EnvelopePlan {
     pub fn new(n: usize, sample_rate: f64) -> Result<Self, SpectrumError> {
         let hann = SpectrumPlan::new(n, Window::Hann)?;
         let forward = RealFftPlanner::<f64>::new().plan_fft_forward(n);
-        let inverse = FftPlanner::<f64>::new().plan_fft_inverse(n);
+        let mut planner = FftPlanner::<f64>::new();
+        let inverse = planner.plan_fft_inverse(n);
         let segment = stft_segment(n);
         Ok(Self {
             sample_rate,
@@ -179,7 +184,9 @@ impl EnvelopePlan {
             real_scratch: forward.make_scratch_vec(),
             analytic: vec![Complex::default(); n],
             complex_scratch: vec![Complex::default(); inverse.get_inplace_scratch_len()],
+            lags: Vec::new(),
             squared: vec![0.0; n],
+            planner,
             forward,
             inverse,
             hann,
@@ -255,15 +262,13 @@ impl EnvelopePlan {
     }
 
     /// Fills `analytic` with `z_j = (1/n) Σ_{k in band} 2 Y_k e^{2πi jk/n}` (docs/model.md
-    /// §7.4); returns the number of bins in the band.
-    fn analytic_signal(&mut self, band: Band) -> usize {
+    /// §7.4).
+    fn analytic_signal(&mut self, band: Band) {
         let n = self.analytic.len();
         self.analytic.fill(Complex::default());
-        let mut bins = 0;
         for (k, (&f, &y)) in self.freqs.iter().zip(&self.spectrum).enumerate() {
             if band.contains(f) {
                 self.analytic[k] = 2.0 * y;
-                bins += 1;
             }
         }
         self.inverse
@@ -272,28 +277,58 @@ impl EnvelopePlan {
         for z in &mut self.analytic {
             *z *= scale;
         }
-        bins
     }
 
     /// `<|z|⁴>/<|z|²>² − 2` of the analytic signal in `band` (NaN when the band holds
-    /// no bin or no power).
+    /// no bin or no power), from the band's bins alone (docs/model.md §7.6): with the
+    /// `B` bins `Z_{k0+b}` and their autocorrelation `R_d = Σ_b Z_{k0+b+d} Z*_{k0+b}`
+    /// (`d = 0..B`, by an FFT of length `≥ 2B`), Parseval applied to `|z_j|²` gives
+    /// `Σ_j |z_j|⁴ / (Σ_j |z_j|²)² · n = (R_0² + 2 Σ_{d≥1} |R_d|²) / R_0²`, where a lag
+    /// `d = n/2` (the whole band of an even `n`) meets its mirror `−n/2` and counts
+    /// `(2 Re R_d)²` instead. The common factor 2 of the `Z_k` cancels.
     fn band_kurtosis(&mut self, band: Band) -> f64 {
-        if self.analytic_signal(band) == 0 {
+        let Some(k0) = self.freqs.iter().position(|&f| band.contains(f)) else {
+            return f64::NAN;
+        };
+        let bins = self.freqs[k0..]
+            .iter()
+            .take_while(|&&f| band.contains(f))
+            .count();
+        let len = (2 * bins).next_power_of_two();
+        let forward = self.planner.plan_fft_forward(len);
+        let inverse = self.planner.plan_fft_inverse(len);
+        self.lags.clear();
+        self.lags.extend_from_slice(&self.spectrum[k0..k0 + bins]);
+        self.lags.resize(len, Complex::default());
+        let scratch = forward
+            .get_inplace_scratch_len()
+            .max(inverse.get_inplace_scratch_len());
+        if self.complex_scratch.len() < scratch {
+            self.complex_scratch.resize(scratch, Complex::default());
+        }
+        forward.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
+        for v in &mut self.lags {
+            *v = Complex::new(v.norm_sqr(), 0.0);
+        }
+        inverse.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
+        let n = self.centred.len();
+        let r0 = self.lags[0].re;
+        if !(r0 > 0.0) {
             return f64::NAN;
         }
-        let n = self.analytic.len() as f64;
-        let (mut m2, mut m4) = (0.0, 0.0);
-        for z in &self.analytic {
-            let p = z.norm_sqr();
-            m2 += p;
-            m4 += p * p;
+        let mut sum = r0 * r0;
+        for (d, r) in self.lags[1..bins]
+            .iter()
+            .enumerate()
+            .map(|(d, r)| (d + 1, r))
+        {
+            sum += if 2 * d == n {
+                (2.0 * r.re).powi(2)
+            } else {
+                2.0 * r.norm_sqr()
+            };
         }
-        let (m2, m4) = (m2 / n, m4 / n);
-        if m2 > 0.0 {
-            m4 / (m2 * m2) - 2.0
-        } else {
-            f64::NAN
-        }
+        sum / (r0 * r0) - 2.0
     }
 
     /// The kurtogram's choice for the loaded samples.
@@ -531,6 +566,59 @@ pub(crate) mod tests {
             "line at {} Hz",
             k as f64 * df
         );
+    }
+
+    #[test]
+    fn band_kurtosis_from_the_bins_equals_the_analytic_signal_s() {
+        // The lag form of docs/model.md §7.6 against the moments of z itself, for
+        // even and odd n, narrow bands, a band at DC and the whole band (whose lag
+        // n/2 meets its mirror for even n).
+        for n in [500, 501, 1024] {
+            let x: Vec<f64> = gaussian(n, 9)
+                .iter()
+                .enumerate()
+                .map(|(j, g)| g + 3.0 * (TAU * 0.1 * j as f64).cos().powi(9))
+                .collect();
+            let mut plan = EnvelopePlan::new(n, 1.0).unwrap();
+            plan.load(&x).unwrap();
+            for band in [
+                Band {
+                    low: 0.0,
+                    high: 0.5,
+                },
+                Band {
+                    low: 0.0,
+                    high: 0.07,
+                },
+                Band {
+                    low: 0.08,
+                    high: 0.13,
+                },
+                Band {
+                    low: 0.3,
+                    high: 0.5,
+                },
+                Band {
+                    low: 0.101,
+                    high: 0.1015,
+                },
+            ] {
+                let fast = plan.band_kurtosis(band);
+                plan.analytic_signal(band);
+                let p: Vec<f64> = plan.analytic.iter().map(|z| z.norm_sqr()).collect();
+                let m2 = p.iter().sum::<f64>() / n as f64;
+                let m4 = p.iter().map(|q| q * q).sum::<f64>() / n as f64;
+                let direct = m4 / (m2 * m2) - 2.0;
+                if direct.is_nan() {
+                    assert!(fast.is_nan(), "n {n} {band:?}: {fast}");
+                } else {
+                    assert!(
+                        (fast - direct).abs() <= 1e-12 * (1.0 + direct.abs()),
+                        "n {n} {band:?}: {fast} vs {direct}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
