@@ -313,7 +313,7 @@ impl EnvelopePlan {
         inverse.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
         let n = self.centred.len();
         let r0 = self.lags[0].re;
-        if !(r0 > 0.0) {
+        if r0.is_nan() || r0 <= 0.0 {
             return f64::NAN;
         }
         let mut sum = r0 * r0;
