@@ -11,8 +11,9 @@ use std::path::Path;
 
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
-    BearingSection, DesignParameter, DesignSection, GeometrySection, GridFile, HarmonicSection,
-    MechanismSection, OutputSection, SolverSection, SpectraSection, WavinessSection,
+    BearingSection, DesignParameter, DesignSection, EnvelopeSection, GeometrySection, GridFile,
+    HarmonicSection, MechanismSection, OutputSection, SolverSection, SpectraSection,
+    WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -238,6 +239,7 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<GeometrySection>("bearing.geometry."));
     expected.extend(keys_of::<SolverSection>("solver."));
     expected.extend(keys_of::<SpectraSection>("spectra."));
+    expected.extend(keys_of::<EnvelopeSection>("envelope."));
     expected.extend(keys_of::<OutputSection>("output."));
     expected.extend(keys_of::<DesignSection>("design."));
     expected.extend(keys_of::<DesignParameter>("design.parameters.*."));

@@ -12,6 +12,7 @@ mod damaged_files;
 mod designs;
 mod docs;
 mod energy;
+mod envelope;
 mod events;
 mod grid;
 mod hard_cases;

@@ -1,8 +1,9 @@
 //! The study file's [`Layout`] for a study (or a shard of it).
 
-use crate::output::{provenance, Layout, Param, ParamValues, Storage, VarSpec};
-use crate::signal::metric_specs;
+use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
+use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
+use crate::signal::{envelope_spectrum_specs, metric_specs};
 use crate::simulate::CHANNELS;
 use crate::study::params::PARAMETERS;
 use crate::study::Shard;
@@ -139,6 +140,9 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             ),
         ]);
     }
+    if let Some(envelope) = &study.envelope {
+        attributes.extend(envelope_attributes(envelope, n_window));
+    }
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.sampling.times(),
@@ -162,8 +166,9 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
                     format!("one-sided amplitude spectrum of {}", ch.long_name),
                 )
             })
+            .chain(study.envelope.iter().flat_map(envelope_spectrum_specs))
             .collect(),
-        metrics: metric_specs(),
+        metrics: metric_specs(study.envelope.as_ref()),
         parameters,
         reference_parameters,
         reference_series: reference_specs(),
@@ -174,6 +179,25 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             deflate_level: study.compression,
         },
     }
+}
+
+/// The root attributes of a study with `envelope:`: how its band is chosen and the
+/// sizes of the kurtogram and the STFT for `n` analysed samples (docs/model.md §7.4–§7.6).
+fn envelope_attributes(envelope: &EnvelopeSettings, n: usize) -> Vec<(String, AttrValue)> {
+    let band = match envelope.band {
+        BandChoice::Auto => "auto".to_string(),
+        BandChoice::Fixed(b) => format!("{} Hz to {} Hz", b.low, b.high),
+    };
+    let segment = stft_segment(n);
+    vec![
+        ("envelope_band".to_string(), band.into()),
+        (
+            "kurtogram_depth".to_string(),
+            i64::from(kurtogram_depth(n)).into(),
+        ),
+        ("stft_segment".to_string(), (segment as i64).into()),
+        ("stft_hop".to_string(), ((segment / 2) as i64).into()),
+    ]
 }
 
 /// FNV-1a, 64 bit: the study fingerprint.

@@ -4,7 +4,7 @@ use super::stats::thread_cpu;
 use crate::mechanism::{CaseParams, Location};
 use crate::output::Status;
 use crate::signal::spectrum::SpectrumPlan;
-use crate::signal::{analyse, metric_specs, CaseAnalysis};
+use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
 use crate::simulate::{simulate, CaseOutput};
 use crate::study::Study;
 
@@ -37,7 +37,8 @@ pub(crate) struct CaseCost {
 }
 
 /// Simulates `params` at file row `row` and derives spectra and metrics against
-/// `reference` (the ideal mechanism at the same speed). Never fails: a failure
+/// `reference` (the ideal mechanism at the same speed), and the envelope analysis
+/// when the study has one (`envelope`, planned for it). Never fails: a failure
 /// becomes a [`Status::Failed`] result with its message.
 pub(crate) fn run_case(
     study: &Study,
@@ -45,10 +46,11 @@ pub(crate) fn run_case(
     params: &CaseParams,
     reference: &CaseOutput,
     plan: &mut SpectrumPlan,
+    envelope: Option<&mut EnvelopeAnalysis>,
 ) -> CaseResult {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
-    let n_metrics = metric_specs().len();
+    let n_metrics = metric_specs(study.envelope.as_ref()).len();
     let simulated = simulate(params, &study.solver, &study.sampling);
     let cpu_simulated = thread_cpu();
     let mut cost = CaseCost {
@@ -77,11 +79,13 @@ pub(crate) fn run_case(
         Err(message) => return failed(message, cost),
     };
     let analysis = analyse(
+        params,
         &out,
         reference,
         study.analysis_window(),
         &study.spectrum_channels,
         plan,
+        envelope,
     );
     let CaseAnalysis {
         spectra,

@@ -38,6 +38,7 @@ use crate::output::{
     OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter, REFERENCE_CHANNELS,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
+use crate::signal::EnvelopeAnalysis;
 use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
 use crate::study::Study;
@@ -469,11 +470,22 @@ fn run_pending(
             pool.broadcast(|_| {
                 let mut plan = SpectrumPlan::new(n_window, window)
                     .expect("window length checked by the layout");
+                let mut envelope = work.study.envelope.clone().map(|settings| {
+                    EnvelopeAnalysis::new(settings, n_window, work.study.sampling.sample_rate)
+                        .expect("window length checked by the layout")
+                });
                 let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
                     let reference = &work.references[case.reference];
-                    let result = run_case(work.study, row, &case.params, reference, &mut plan);
+                    let result = run_case(
+                        work.study,
+                        row,
+                        &case.params,
+                        reference,
+                        &mut plan,
+                        envelope.as_mut(),
+                    );
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));
                     tally.case(

@@ -66,6 +66,9 @@ pub struct GridFile {
     /// Spectrum settings.
     #[serde(default)]
     pub spectra: Option<SpectraSection>,
+    /// Envelope analysis and condition indicators (none when absent).
+    #[serde(default)]
+    pub envelope: Option<S<EnvelopeSection>>,
     /// File storage settings.
     #[serde(default)]
     pub output: Option<OutputSection>,
@@ -220,6 +223,27 @@ pub struct SpectraSection {
     pub window: Option<S<String>>,
     /// Channels to transform (default: slider_acceleration, crank_moment, bearing_force).
     pub channels: Option<S<Vec<S<String>>>>,
+}
+
+/// `envelope:` settings.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvelopeSection {
+    /// Channels analysed (at least one).
+    pub channels: S<Vec<S<String>>>,
+    /// `[low, high]` frequencies, or `auto` (the fast kurtogram); default `auto`.
+    #[serde(default)]
+    pub band: Option<S<BandValue>>,
+}
+
+/// An `envelope.band` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum BandValue {
+    /// `[low, high]`, each a number (Hz) or a quantity (`"2 kHz"`).
+    Range(Vec<Scalar>),
+    /// A name: `auto`.
+    Name(String),
 }
 
 /// `output:` settings.

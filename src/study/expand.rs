@@ -5,7 +5,9 @@ use std::path::Path;
 
 use serde_saphyr::Location;
 
-use super::config::{GridFile, OutputSection, Scalar, SpectraSection, WavinessSection, S};
+use super::config::{
+    BandValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection, WavinessSection, S,
+};
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
@@ -15,6 +17,8 @@ mod design;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site};
+use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
+use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL};
 
@@ -298,6 +302,11 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
+    let envelope = file
+        .envelope
+        .as_ref()
+        .map(|e| envelope_settings(&ctx, e, &sampling, transient))
+        .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     Ok(Study {
         name: file.name.value,
@@ -310,6 +319,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         transient,
         window,
         spectrum_channels,
+        envelope,
         float32,
         compression,
         axes: axes_names,
@@ -511,7 +521,11 @@ fn check_study_memory(
             .spectra
             .as_ref()
             .and_then(|s| s.channels.as_ref())
-            .map_or(3, |c| c.value.len()),
+            .map_or(3, |c| c.value.len())
+            + file
+                .envelope
+                .as_ref()
+                .map_or(0, |e| 2 * e.value.channels.value.len()),
         float32: file
             .output
             .as_ref()
@@ -693,27 +707,125 @@ fn spectra_settings(
             .value
             .iter()
             .enumerate()
-            .map(|(k, c)| {
-                CHANNELS
-                    .iter()
-                    .find(|ch| ch.name == c.value)
-                    .map(|ch| ch.name)
-                    .ok_or_else(|| {
-                        let names: Vec<&str> = CHANNELS.iter().map(|ch| ch.name).collect();
-                        ctx.err(
-                            Some(at(&c.referenced)),
-                            &format!("spectra.channels[{k}]"),
-                            format!(
-                                "unknown channel `{}`; expected one of: {}",
-                                c.value,
-                                names.join(", ")
-                            ),
-                        )
-                    })
-            })
+            .map(|(k, c)| channel_named(ctx, c, &format!("spectra.channels[{k}]")))
             .collect::<Result<_, _>>()?,
     };
     Ok((window, channels))
+}
+
+/// The channel of [`CHANNELS`] named by `c` (at `field`).
+fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static str, StudyError> {
+    CHANNELS
+        .iter()
+        .find(|ch| ch.name == c.value)
+        .map(|ch| ch.name)
+        .ok_or_else(|| {
+            let names: Vec<&str> = CHANNELS.iter().map(|ch| ch.name).collect();
+            ctx.err(
+                Some(at(&c.referenced)),
+                field,
+                format!(
+                    "unknown channel `{}`; expected one of: {}",
+                    c.value,
+                    names.join(", ")
+                ),
+            )
+        })
+}
+
+/// The `envelope:` settings: distinct channels, and a band `[low, high]` with
+/// `0 <= low < high <= sample_rate / 2` holding at least one bin of the analysed
+/// window, or `auto` (the default).
+fn envelope_settings(
+    ctx: &Ctx<'_>,
+    section: &S<EnvelopeSection>,
+    sampling: &Sampling,
+    transient: f64,
+) -> Result<EnvelopeSettings, StudyError> {
+    let list = &section.value.channels;
+    if list.value.is_empty() {
+        return Err(ctx.err(
+            Some(at(&list.referenced)),
+            "envelope.channels",
+            "at least one channel is needed",
+        ));
+    }
+    let mut channels: Vec<&'static str> = Vec::new();
+    for (k, c) in list.value.iter().enumerate() {
+        let field = format!("envelope.channels[{k}]");
+        let name = channel_named(ctx, c, &field)?;
+        if channels.contains(&name) {
+            return Err(ctx.err(
+                Some(at(&c.referenced)),
+                &field,
+                format!("channel `{name}` is listed twice"),
+            ));
+        }
+        channels.push(name);
+    }
+    let band = match &section.value.band {
+        None => BandChoice::Auto,
+        Some(S {
+            value: BandValue::Name(name),
+            ..
+        }) if name == "auto" => BandChoice::Auto,
+        Some(v) => {
+            let place = Some(at(&v.referenced));
+            let bad = |message: String| ctx.err(place, "envelope.band", message);
+            let BandValue::Range(edges) = &v.value else {
+                return Err(bad(
+                    "expected `auto` or two frequencies [low, high], e.g. [\"2 kHz\", \"8 kHz\"]"
+                        .to_string(),
+                ));
+            };
+            let [low, high] = edges.as_slice() else {
+                return Err(bad(format!(
+                    "{} values; expected two frequencies [low, high] or `auto`",
+                    edges.len()
+                )));
+            };
+            let hz = |s: &Scalar| -> Result<f64, StudyError> {
+                let x = match s {
+                    Scalar::Num(x) => *x,
+                    Scalar::Text(t) => Dimension::Frequency
+                        .parse(t)
+                        .map_err(|m| ctx.err(place, "envelope.band", m))?,
+                };
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(bad(format!("{s} is not a finite frequency")))
+                }
+            };
+            let band = Band {
+                low: hz(low)?,
+                high: hz(high)?,
+            };
+            let nyquist = 0.5 * sampling.sample_rate;
+            if !(0.0 <= band.low && band.low < band.high && band.high <= nyquist) {
+                return Err(bad(format!(
+                    "[{} Hz, {} Hz] is not allowed: 0 <= low < high <= sample_rate / 2 = {nyquist} Hz",
+                    band.low, band.high
+                )));
+            }
+            let n = sampling.analysis_window(transient).len();
+            let bins = frequencies(n, sampling.sample_rate)
+                .into_iter()
+                .filter(|&f| band.contains(f))
+                .count();
+            if bins == 0 {
+                return Err(bad(format!(
+                    "[{} Hz, {} Hz] holds no frequency bin of the analysed window \
+                     ({n} samples: bins every {} Hz); widen the band",
+                    band.low,
+                    band.high,
+                    sampling.sample_rate / n as f64
+                )));
+            }
+            BandChoice::Fixed(band)
+        }
+    };
+    Ok(EnvelopeSettings { channels, band })
 }
 
 /// Whether series and spectra are stored as float32, and the deflate level.

@@ -22,6 +22,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::mechanism::CaseParams;
+use crate::signal::envelope::EnvelopeSettings;
 use crate::simulate::Sampling;
 use crate::solve::SolverSettings;
 
@@ -95,6 +96,9 @@ pub struct Study {
     pub window: String,
     /// Channels transformed into spectra (names from [`crate::simulate::CHANNELS`]).
     pub spectrum_channels: Vec<&'static str>,
+    /// The envelope analysis and condition indicators (`envelope:`); none when the
+    /// grid has no `envelope:`, and then nothing of it is computed or stored.
+    pub envelope: Option<EnvelopeSettings>,
     /// Store series and spectra as float32.
     pub float32: bool,
     /// Deflate level (0 = none).
@@ -177,7 +181,8 @@ impl Study {
             memory::Shape {
                 samples: self.sampling.len() as u64,
                 window: self.analysis_window().len() as u64,
-                spectra: self.spectrum_channels.len(),
+                spectra: self.spectrum_channels.len()
+                    + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
