@@ -25,3 +25,4 @@ mod properties;
 mod refusals;
 mod stiffness;
 mod validation;
+mod variable_speed;

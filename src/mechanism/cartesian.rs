@@ -3,7 +3,7 @@
 //!
 //! Bodies: crank (0), connecting rod (1), slider (2); coordinates
 //! `q = (x2, y2, θ2, x3, y3, θ3, x4, y4, θ4)`. The crank pivot is the origin, the
-//! slider runs on the x axis, and the crank is driven at `θ2(t)` (docs/model.md §1.2).
+//! slider runs on the x axis, and the crank is driven at `θ2(t)` (docs/model.md §1.5).
 
 use super::{CaseParams, Location, Sample, GRAVITY};
 use crate::bearing::{BallBearing, Mounting};

@@ -133,7 +133,7 @@ pub struct CaseParams {
     /// Crank speed (rev/min, > 0) when `speed` is `None`; NaN when `speed` gives
     /// a varying profile.
     pub rpm: f64,
-    /// A varying crank speed (docs/model.md §1.2); `None` for the constant `rpm`.
+    /// A varying crank speed (docs/model.md §1.5); `None` for the constant `rpm`.
     pub speed: Option<SpeedProfile>,
     /// Gravity along −y ([`GRAVITY`]) when true.
     pub gravity: bool,

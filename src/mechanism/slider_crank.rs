@@ -1,6 +1,6 @@
 //! The slider-crank of docs/model.md §1 in minimal coordinates: the production model.
 //!
-//! With the crank driven at `θ2(t)` (docs/model.md §1.2: `ω t`, or a speed profile's
+//! With the crank driven at `θ2(t)` (docs/model.md §1.5: `ω t`, or a speed profile's
 //! closed form) and the slider on the x axis, a bearing case
 //! has two degrees of freedom, the bearing eccentricity `e = (ex, ey)`, and the
 //! state is `y = (ex, ey, ėx, ėy)`. Everything else follows in closed form:

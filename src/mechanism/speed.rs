@@ -1,4 +1,4 @@
-//! The crank's speed profile (docs/model.md §1.2): what a grid file's `speed:` gives
+//! The crank's speed profile (docs/model.md §1.5): what a grid file's `speed:` gives
 //! ([`SpeedProfile`], in rev/min, s and Hz), and the crank motion it prescribes
 //! ([`CrankDrive`], in rad, rad/s and rad/s²), with the angle `θ2 = ∫ω dt` from 0,
 //! its rate and its acceleration in closed form for every profile.
@@ -215,7 +215,7 @@ pub struct Knots {
     angle: Vec<f64>,
 }
 
-/// The prescribed crank motion of one case (docs/model.md §1.2), each variant in
+/// The prescribed crank motion of one case (docs/model.md §1.5), each variant in
 /// closed form.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CrankDrive {
