@@ -103,7 +103,11 @@ fn ideal_mechanism_follows_the_closed_form_for_every_profile() {
             x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min)
         };
         let worst = |a: &[f64], b: &[f64]| {
-            a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / range(b)
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+                / range(b)
         };
         for (model, acc_tol) in [(0, 1e-12), (1, 1e-9)] {
             let (e_acc, e_torque) = (
@@ -181,7 +185,10 @@ fn energy_balance_closes_with_a_varying_driver() {
     );
     sine.gravity = true;
     for (name, case) in [
-        ("ramp crank_ground", case_with(Location::CrankGround, ramp())),
+        (
+            "ramp crank_ground",
+            case_with(Location::CrankGround, ramp()),
+        ),
         ("sine crank_rod", sine),
     ] {
         let production = balance(&case, 0.15, false);
@@ -225,8 +232,7 @@ fn production_and_reference_agree_on_a_ramp() {
             .iter()
             .zip(&b)
             .map(|(x, y)| {
-                (x.eccentricity[0] - y.eccentricity[0])
-                    .hypot(x.eccentricity[1] - y.eccentricity[1])
+                (x.eccentricity[0] - y.eccentricity[0]).hypot(x.eccentricity[1] - y.eccentricity[1])
             })
             .fold(0.0, f64::max)
             / case.bearing.clearance;
@@ -240,7 +246,9 @@ fn production_and_reference_agree_on_a_ramp() {
             .map(|(x, y)| (x.slider_acceleration - y.slider_acceleration).abs())
             .fold(0.0, f64::max)
             / range;
-        println!("{location}: eccentricity {e:.2e} of the clearance, slider acceleration {acc:.2e}");
+        println!(
+            "{location}: eccentricity {e:.2e} of the clearance, slider acceleration {acc:.2e}"
+        );
         assert!(e < 1e-6, "{location}: eccentricity {e:e}");
         assert!(acc < 1e-6, "{location}: slider acceleration {acc:e}");
     }

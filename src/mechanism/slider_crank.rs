@@ -490,8 +490,7 @@ impl SliderCrank {
         held: bool,
     ) -> [f64; 3] {
         let k = &self.k;
-        let torque =
-            k.driver_torque::<VARYING>(kin, &k.accelerations(kin, edd), motion.accel);
+        let torque = k.driver_torque::<VARYING>(kin, &k.accelerations(kin, edd), motion.accel);
         let omega = motion.rate;
         let Some(w) = self.bearing.as_ref() else {
             return [torque * omega, 0.0, 0.0];
@@ -696,18 +695,50 @@ impl OdeSystem for SliderCrank {
         let (isa, varies) = (self.isa, self.drive.varies());
         if self.ledger {
             let (edd, rates) = if varies {
-                dispatch(isa, LedgerTask::<true> { sys: self, t, y, held })
+                dispatch(
+                    isa,
+                    LedgerTask::<true> {
+                        sys: self,
+                        t,
+                        y,
+                        held,
+                    },
+                )
             } else {
-                dispatch(isa, LedgerTask::<false> { sys: self, t, y, held })
+                dispatch(
+                    isa,
+                    LedgerTask::<false> {
+                        sys: self,
+                        t,
+                        y,
+                        held,
+                    },
+                )
             }?;
             dydt[..4].copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
             dydt[4..4 + LEDGER_LEN].copy_from_slice(&rates);
             return Ok(());
         }
         let edd = if varies {
-            dispatch(isa, RhsTask::<true> { sys: self, t, y, held })
+            dispatch(
+                isa,
+                RhsTask::<true> {
+                    sys: self,
+                    t,
+                    y,
+                    held,
+                },
+            )
         } else {
-            dispatch(isa, RhsTask::<false> { sys: self, t, y, held })
+            dispatch(
+                isa,
+                RhsTask::<false> {
+                    sys: self,
+                    t,
+                    y,
+                    held,
+                },
+            )
         }?;
         dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
         Ok(())

@@ -105,7 +105,11 @@ impl SpeedProfile {
                         return Err(ParamError::new(
                             format!("speed.time[{k}]"),
                             time[k],
-                            format!("finite and above speed.time[{}] = {} s (times increase)", k - 1, time[k - 1]),
+                            format!(
+                                "finite and above speed.time[{}] = {} s (times increase)",
+                                k - 1,
+                                time[k - 1]
+                            ),
                         ));
                     }
                 }
@@ -144,7 +148,8 @@ impl SpeedProfile {
                 let rate: Vec<f64> = rpm.iter().map(|&v| w(v)).collect();
                 let mut angle = vec![0.0; time.len()];
                 for k in 1..time.len() {
-                    angle[k] = angle[k - 1] + 0.5 * (rate[k - 1] + rate[k]) * (time[k] - time[k - 1]);
+                    angle[k] =
+                        angle[k - 1] + 0.5 * (rate[k - 1] + rate[k]) * (time[k] - time[k - 1]);
                 }
                 CrankDrive::Table(Arc::new(Knots {
                     time: time.clone(),
@@ -160,11 +165,11 @@ impl SpeedProfile {
         match *self {
             SpeedProfile::Ramp { from, to, .. } if from == to => Some(from),
             SpeedProfile::Sine {
-                mean, amplitude, ..
-            } if amplitude == 0.0 => Some(mean),
-            SpeedProfile::Table { ref rpm, .. } if rpm.iter().all(|&v| v == rpm[0]) => {
-                Some(rpm[0])
-            }
+                mean,
+                amplitude: 0.0,
+                ..
+            } => Some(mean),
+            SpeedProfile::Table { ref rpm, .. } if rpm.iter().all(|&v| v == rpm[0]) => Some(rpm[0]),
             _ => None,
         }
     }

@@ -48,7 +48,10 @@ const PROFILE_DESCRIPTION: &str =
 
 /// The name of a case's speed profile, `constant` for `rpm`.
 fn profile_name(p: &CaseParams) -> String {
-    p.speed.as_ref().map_or("constant", |s| s.name()).to_string()
+    p.speed
+        .as_ref()
+        .map_or("constant", |s| s.name())
+        .to_string()
 }
 
 /// The layout of the file for the cases at `rows` (indices into `study.cases`), the

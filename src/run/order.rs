@@ -20,11 +20,7 @@ use crate::study::Study;
 /// balls; the bearing at crank_rod, listed after crank_ground) tend to come last.
 pub(super) fn dispatch_order(study: &Study, rows: &[usize], pending: &mut [usize]) {
     let revolution = |position: usize| study.cases[rows[position]].params.revolution_time();
-    pending.sort_by(|&a, &b| {
-        revolution(a)
-            .total_cmp(&revolution(b))
-            .then(b.cmp(&a))
-    });
+    pending.sort_by(|&a, &b| revolution(a).total_cmp(&revolution(b)).then(b.cmp(&a)));
 }
 
 #[cfg(test)]

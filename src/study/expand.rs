@@ -314,7 +314,9 @@ fn check_speed(case: &CaseParams, param: &str) -> Result<(), String> {
         _ => Err(format!(
             "{param} sets a field of the {needs} profile, and the case's speed is {}; \
              give `speed: {{profile: {needs}, ...}}`",
-            has.map_or("the constant `rpm`".to_string(), |p| format!("a {p} profile"))
+            has.map_or("the constant `rpm`".to_string(), |p| format!(
+                "a {p} profile"
+            ))
         )),
     }
 }
@@ -681,7 +683,8 @@ fn expand_explicit(
                     ctx.apply(&mut params, name, &v, &field, effects, &mut case_prov)?;
                 }
                 CaseValue::Speed(sp) if name == "speed" => {
-                    params.speed = Some(ctx.speed(sp, &value.referenced, &field, &mut case_prov)?);
+                    params.speed =
+                        Some(ctx.speed(sp, &value.referenced, &field, &mut case_prov)?);
                     params.rpm = f64::NAN;
                 }
                 CaseValue::Speed(_) => {
