@@ -146,15 +146,19 @@ impl SpeedProfile {
             },
             SpeedProfile::Table { ref time, ref rpm } => {
                 let rate: Vec<f64> = rpm.iter().map(|&v| w(v)).collect();
-                let mut angle = vec![0.0; time.len()];
-                for k in 1..time.len() {
-                    angle[k] =
-                        angle[k - 1] + 0.5 * (rate[k - 1] + rate[k]) * (time[k] - time[k - 1]);
+                let n = time.len();
+                let mut angle = vec![0.0; n];
+                let mut slope = vec![0.0; n];
+                for k in 1..n {
+                    let dt = time[k] - time[k - 1];
+                    angle[k] = angle[k - 1] + 0.5 * (rate[k - 1] + rate[k]) * dt;
+                    slope[k - 1] = (rate[k] - rate[k - 1]) / dt;
                 }
                 CrankDrive::Table(Arc::new(Knots {
                     time: time.clone(),
                     rate,
                     angle,
+                    slope,
                 }))
             }
         }
@@ -211,13 +215,15 @@ pub struct CrankMotion {
     pub accel: f64,
 }
 
-/// The knots of a piecewise-linear speed: times (s), speeds (rad/s) and the crank
-/// angle reached at each (rad).
+/// The knots of a piecewise-linear speed: times (s), speeds (rad/s), the crank
+/// angle reached at each (rad) and the acceleration after each (rad/s², 0 after
+/// the last).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Knots {
     time: Vec<f64>,
     rate: Vec<f64>,
     angle: Vec<f64>,
+    slope: Vec<f64>,
 }
 
 /// The prescribed crank motion of one case (docs/model.md §1.5), each variant in
@@ -294,13 +300,14 @@ impl CrankDrive {
                 amplitude,
                 nu,
             } => {
-                let (s, c) = (nu * t).sin_cos();
-                // 1 − cos νt = 2 sin²(νt/2): no cancellation at small t.
-                let half = (0.5 * nu * t).sin();
+                // One sin_cos of the half angle h = νt/2: 1 − cos νt = 2 sin²h (no
+                // cancellation at small t), sin νt = 2 sin h cos h, cos νt = 1 − 2 sin²h.
+                let (sh, ch) = (0.5 * nu * t).sin_cos();
+                let versine = 2.0 * sh * sh;
                 CrankMotion {
-                    angle: mean * t + amplitude / nu * (2.0 * half * half),
-                    rate: mean + amplitude * s,
-                    accel: amplitude * nu * c,
+                    angle: mean * t + amplitude / nu * versine,
+                    rate: mean + amplitude * (2.0 * sh * ch),
+                    accel: amplitude * nu * (1.0 - versine),
                 }
             }
             CrankDrive::Table(ref k) => {
@@ -315,7 +322,7 @@ impl CrankDrive {
                     };
                 }
                 let j = i.max(1) - 1;
-                let slope = (k.rate[j + 1] - k.rate[j]) / (k.time[j + 1] - k.time[j]);
+                let slope = k.slope[j];
                 let tau = t - k.time[j];
                 CrankMotion {
                     angle: k.angle[j] + tau * (k.rate[j] + 0.5 * slope * tau),
