@@ -11,7 +11,7 @@ fn ideal(rpm: f64) -> (CartesianSliderCrank, MechanismParams, f64) {
         rpm,
         ..CaseParams::default()
     };
-    let w = case.omega();
+    let w = case.drive().motion(0.0).rate;
     (CartesianSliderCrank::new(&case).unwrap(), case.mechanism, w)
 }
 

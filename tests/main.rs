@@ -27,3 +27,4 @@ mod properties;
 mod refusals;
 mod stiffness;
 mod validation;
+mod variable_speed;

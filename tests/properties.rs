@@ -88,6 +88,7 @@ fn case() -> impl Strategy<Value = CaseParams> {
                         Location::CrankGround
                     },
                     rpm: ln_rpm.exp(),
+                    speed: None,
                     gravity,
                 }
             },
@@ -196,6 +197,7 @@ fn stress_case() -> CaseParams {
         },
         location: Location::CrankRod,
         rpm: 3390.0,
+        speed: None,
         gravity: true,
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Bodies: crank (0), connecting rod (1), slider (2); coordinates
 //! `q = (x2, y2, θ2, x3, y3, θ3, x4, y4, θ4)`. The crank pivot is the origin, the
-//! slider runs on the x axis, and the crank is driven at `θ2 = ω t`.
+//! slider runs on the x axis, and the crank is driven at `θ2(t)` (docs/model.md §1.5).
 
 use super::{CaseParams, Location, Sample, GRAVITY};
 use crate::bearing::{BallBearing, Mounting};
@@ -80,7 +80,7 @@ impl CartesianSliderCrank {
             Constraint::Driver {
                 body: CRANK,
                 theta0: 0.0,
-                omega: case.omega(),
+                drive: case.drive(),
             },
         ];
         let gravity = case.gravity.then_some(GRAVITY);
@@ -97,8 +97,8 @@ impl CartesianSliderCrank {
             0.0,
             0.0,
         ];
-        let mut ideal_constraints = vec![crank_ground, crank_rod];
-        ideal_constraints.extend(common);
+        let mut ideal_constraints = vec![crank_ground.clone(), crank_rod.clone()];
+        ideal_constraints.extend(common.clone());
         let mut ideal = System::new(
             bodies.clone(),
             ideal_constraints,

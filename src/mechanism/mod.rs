@@ -7,8 +7,10 @@ mod cartesian;
 mod model;
 mod params;
 mod slider_crank;
+mod speed;
 
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
 pub use params::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
 pub use slider_crank::{Energy, SliderCrank};
+pub use speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};

@@ -1,12 +1,13 @@
 //! What defines one case of the slider-crank (docs/model.md §1): where the bearing
 //! sits, the body parameters, the case's parameters, and the outputs at one instant.
 
-use std::f64::consts::PI;
 use std::fmt;
 use std::str::FromStr;
 
 use crate::bearing::BearingParams;
 use crate::error::ParamError;
+
+use super::{CrankDrive, SpeedProfile};
 
 /// Standard gravity (m/s²), along −y when the effect is on.
 pub const GRAVITY: f64 = 9.81;
@@ -129,8 +130,11 @@ pub struct CaseParams {
     pub bearing: BearingParams,
     /// Where the bearing sits.
     pub location: Location,
-    /// Crank speed (rev/min, > 0).
+    /// Crank speed (rev/min, > 0) when `speed` is `None`; NaN when `speed` gives
+    /// a varying profile.
     pub rpm: f64,
+    /// A varying crank speed (docs/model.md §1.5); `None` for the constant `rpm`.
+    pub speed: Option<SpeedProfile>,
     /// Gravity along −y ([`GRAVITY`]) when true.
     pub gravity: bool,
 }
@@ -143,15 +147,27 @@ impl Default for CaseParams {
             bearing: BearingParams::default(),
             location: Location::CrankGround,
             rpm: 300.0,
+            speed: None,
             gravity: false,
         }
     }
 }
 
 impl CaseParams {
-    /// Crank speed ω (rad/s).
-    pub fn omega(&self) -> f64 {
-        2.0 * PI * self.rpm / 60.0
+    /// The crank motion: constant at `rpm`, or the `speed` profile's.
+    pub fn drive(&self) -> CrankDrive {
+        match &self.speed {
+            None => CrankDrive::constant(self.rpm),
+            Some(p) => p.drive(),
+        }
+    }
+
+    /// The time of the crank's first revolution (s): `60/rpm` at constant speed.
+    pub fn revolution_time(&self) -> f64 {
+        match &self.speed {
+            None => 60.0 / self.rpm,
+            Some(p) => p.revolution_time(),
+        }
     }
 
     /// Checks every field.
@@ -168,10 +184,18 @@ impl CaseParams {
                 ));
             }
         }
-        if !(self.rpm.is_finite() && self.rpm > 0.0) {
-            return Err(ParamError::new("rpm", self.rpm, "finite and > 0 rev/min"));
+        match &self.speed {
+            None if !(self.rpm.is_finite() && self.rpm > 0.0) => {
+                Err(ParamError::new("rpm", self.rpm, "finite and > 0 rev/min"))
+            }
+            None => Ok(()),
+            Some(_) if !self.rpm.is_nan() => Err(ParamError::new(
+                "rpm",
+                self.rpm,
+                "not given together with `speed` (give one of them)",
+            )),
+            Some(p) => p.validate(),
         }
-        Ok(())
     }
 }
 

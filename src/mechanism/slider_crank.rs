@@ -1,10 +1,11 @@
 //! The slider-crank of docs/model.md §1 in minimal coordinates: the production model.
 //!
-//! With the crank driven at `θ2 = ω t` and the slider on the x axis, a bearing case
+//! With the crank driven at `θ2(t)` (docs/model.md §1.5: `ω t`, or a speed profile's
+//! closed form) and the slider on the x axis, a bearing case
 //! has two degrees of freedom, the bearing eccentricity `e = (ex, ey)`, and the
 //! state is `y = (ex, ey, ėx, ėy)`. Everything else follows in closed form:
 //!
-//! - rod big end `A = e + L2 u` with `u = (cos ω t, sin ω t)` (crank_ground: the
+//! - rod big end `A = e + L2 u` with `u = (cos θ2, sin θ2)` (crank_ground: the
 //!   crank pivot sits at `e`; crank_rod: the big end sits `e` from the crank pin);
 //! - rod angle from `A_y + L3 sin θ3 = 0`, `cos θ3 = +√(1 − sin²θ3)` (slider to the
 //!   right of the big end, the branch of the initial configuration);
@@ -22,6 +23,12 @@
 //! energy balance of docs/model.md §4.4 (§3.8); off by default, and a run without it
 //! evaluates exactly what it did before the ledger existed.
 //!
+//! A varying speed adds the crank's angular acceleration `θ̈2` to the big end's
+//! acceleration (`Ä = ë − L2 θ̇2² u + L2 θ̈2 u⊥`) and `J2 θ̈2` to the driver torque.
+//! Whether those terms exist is a const parameter of the right-hand side chosen
+//! once per case ([`CrankDrive::varies`]): at constant speed the arithmetic is that
+//! of `θ2 = ω t` alone.
+//!
 //! Constraints hold exactly by construction (no drift, no Newton iteration). The
 //! general Cartesian model ([`super::CartesianSliderCrank`]) is kept as the reference: the
 //! parity tests compare the two. The ideal mechanism has no state at all and is
@@ -33,7 +40,7 @@ use crate::multibody::Ledger;
 use crate::numeric::simd::{dispatch, Isa, LaneTask, Lanes};
 use crate::solve::OdeSystem;
 
-use super::{CaseParams, Location, Sample, GRAVITY};
+use super::{CaseParams, CrankDrive, CrankMotion, Location, Sample, GRAVITY};
 
 /// Mechanism constants of the reduced equations (SI).
 #[derive(Debug, Clone, Copy)]
@@ -48,6 +55,7 @@ struct Constants {
     m3: f64,
     j3: f64,
     m4: f64,
+    /// Crank speed ω (rad/s) of a constant-speed case (unused when the speed varies).
     omega: f64,
     /// `c_g`: 1 when the crank translates with `e` (crank_ground), else 0.
     crank_moves: f64,
@@ -68,8 +76,9 @@ struct Constants {
 }
 
 impl Constants {
-    /// The constants of mechanism `mp` with the bearing at `location`, crank speed
-    /// `omega` (rad/s) and gravity `g` (m/s², 0 when off).
+    /// The constants of mechanism `mp` with the bearing at `location`, constant crank
+    /// speed `omega` (rad/s; any value when the speed varies) and gravity `g` (m/s², 0
+    /// when off).
     fn new(mp: &super::MechanismParams, location: Location, omega: f64, g: f64) -> Self {
         let inv_l3 = 1.0 / mp.rod_length;
         let (m2, m3, j3, m4) = (mp.crank_mass, mp.rod_mass, mp.rod_inertia, mp.slider_mass);
@@ -105,17 +114,19 @@ impl Constants {
         }
     }
 
-    /// Kinematics at crank angle `ω t` given as `(sin, cos)`, eccentricity `e` (m)
+    /// Kinematics at crank angle `θ2` given as `(sin, cos)`, crank rate and
+    /// acceleration `m` (the acceleration only when `VARYING`), eccentricity `e` (m)
     /// and its rate `ed` (m/s).
     #[inline(always)]
-    fn kinematics(
+    fn kinematics<const VARYING: bool>(
         &self,
         (uy, ux): (f64, f64),
+        m: &CrankMotion,
         e: [f64; 2],
         ed: [f64; 2],
     ) -> Result<Kinematics, ModelError> {
         let k = self;
-        let w2 = k.omega * k.omega;
+        let w2 = m.rate * m.rate;
         let s = -(e[1] + k.l2 * uy) * k.inv_l3;
         let s2 = s * s;
         let c2 = 1.0 - s2;
@@ -136,14 +147,18 @@ impl Constants {
         let inv_p = 1.0 / (k.p0 + k.p1 * s2);
         let inv_c = c * inv_c2;
         // θ̇3 = k_θ Ȧ_y with k_θ = ∂θ3/∂A_y = −1/(L3 c); the whirl L3 θ̇3².
-        let rate = ed[1] + k.l2 * k.omega * ux;
+        let rate = ed[1] + k.l2 * m.rate * ux;
         let whirl = k.inv_l3 * inv_c2 * (rate * rate);
-        // At ë = 0, with Ä_y = −L2 ω² sin ωt: θ̈3 = k_θ (Ä_y − s whirl), and along
-        // the rod −L3 (s θ̈3 + c θ̇3²) = (s Ä_y − whirl)/c.
-        let big_end_y = -k.l2 * w2 * uy;
+        // At ë = 0, with Ä = −L2 θ̇2² u + L2 θ̈2 u⊥ (§3.1): θ̈3 = k_θ (Ä_y − s whirl),
+        // and along the rod −L3 (s θ̈3 + c θ̇3²) = (s Ä_y − whirl)/c.
+        let mut big_end_y = -k.l2 * w2 * uy;
+        let mut big_end_x = -k.l2 * w2 * ux;
+        if VARYING {
+            big_end_y += k.l2 * m.accel * ux;
+            big_end_x -= k.l2 * m.accel * uy;
+        }
         let (normal, along_c) = (big_end_y - s * whirl, s * big_end_y - whirl);
         let along = along_c * inv_c;
-        let big_end_x = -k.l2 * w2 * ux;
         Ok(Kinematics {
             u: [ux, uy],
             s,
@@ -206,9 +221,15 @@ impl Constants {
     }
 
     /// Driver torque (N m, §3.4): d'Alembert over a virtual δθ2 at fixed e, under
-    /// which the big end moves by L2 u⊥ δθ2 and the bearing force does no work.
+    /// which the big end moves by L2 u⊥ δθ2 and the bearing force does no work; with
+    /// `VARYING`, the crank's own `J2 θ̈2` for crank acceleration `accel` (rad/s²).
     #[inline(always)]
-    fn driver_torque(&self, kin: &Kinematics, acc: &Accelerations) -> f64 {
+    fn driver_torque<const VARYING: bool>(
+        &self,
+        kin: &Kinematics,
+        acc: &Accelerations,
+        accel: f64,
+    ) -> f64 {
         let k = self;
         let (u, tan) = (kin.u, kin.tan);
         let Accelerations {
@@ -218,20 +239,25 @@ impl Constants {
             crank_dd,
         } = *acc;
         let da = [-k.l2 * u[1], k.l2 * u[0]];
-        k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
+        let torque = k.m2 * (crank_dd[0] * 0.5 * da[0] + (crank_dd[1] + k.g) * 0.5 * da[1])
             + k.j3 * theta_dd * kin.k_theta * da[1]
             + k.m3 * (rod_dd[0] * (da[0] + 0.5 * tan * da[1]) + (rod_dd[1] + k.g) * 0.5 * da[1])
-            + k.m4 * slider_dd * (da[0] + tan * da[1])
+            + k.m4 * slider_dd * (da[0] + tan * da[1]);
+        if VARYING {
+            torque + k.j2 * accel
+        } else {
+            torque
+        }
     }
 
     /// Kinetic and gravitational potential energy (J) at eccentricity `e` (m), its
-    /// rate `ed` (m/s) and crank angle `ω t` given as `u = (cos, sin)` (§3.8), from
-    /// the body velocities of §3.1: `Ȧ = ė + L2 ω u⊥`, `θ̇3 = k_θ Ȧ_y`,
+    /// rate `ed` (m/s), crank rate `w` (rad/s) and crank angle given as `u = (cos, sin)`
+    /// (§3.8), from the body velocities of §3.1: `Ȧ = ė + L2 ω u⊥`, `θ̇3 = k_θ Ȧ_y`,
     /// `ẋ4 = Ȧ_x + tan θ3 Ȧ_y`, `ṙ3 = ((Ȧ_x + ẋ4)/2, Ȧ_y/2)`, `ṙ2 = c_g ė + (L2/2) ω u⊥`.
-    fn body_energies(&self, kin: &Kinematics, e: [f64; 2], ed: [f64; 2]) -> (f64, f64) {
+    fn body_energies(&self, kin: &Kinematics, w: f64, e: [f64; 2], ed: [f64; 2]) -> (f64, f64) {
         let k = self;
         let (u, cg) = (kin.u, k.crank_moves);
-        let tip = [-k.l2 * k.omega * u[1], k.l2 * k.omega * u[0]];
+        let tip = [-k.l2 * w * u[1], k.l2 * w * u[0]];
         let big_end = [ed[0] + tip[0], ed[1] + tip[1]];
         let rod_rate = kin.k_theta * big_end[1];
         let slider = big_end[0] + kin.tan * big_end[1];
@@ -240,11 +266,11 @@ impl Constants {
         let square = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
         let kinetic = 0.5
             * (k.m2 * square(crank)
-                + k.j2 * k.omega * k.omega
+                + k.j2 * w * w
                 + k.m3 * square(rod)
                 + k.j3 * rod_rate * rod_rate
                 + k.m4 * slider * slider);
-        // Heights: crank centre c_g e_y + (L2/2) sin ωt, rod centre A_y/2; the
+        // Heights: crank centre c_g e_y + (L2/2) sin θ2, rod centre A_y/2; the
         // slider stays on the guide.
         let big_end_y = e[1] + k.l2 * u[1];
         let gravity = k.g * (k.m2 * (cg * e[1] + 0.5 * k.l2 * u[1]) + k.m3 * 0.5 * big_end_y);
@@ -295,7 +321,7 @@ struct Bearing {
 /// Kinematics at one `(t, e, ė)`, with every acceleration split as `J ë + a₀`.
 #[derive(Debug, Clone, Copy)]
 struct Kinematics {
-    /// `(cos ω t, sin ω t)`.
+    /// `(cos θ2, sin θ2)`.
     u: [f64; 2],
     /// `sin θ3`, `cos θ3`, `tan θ3`.
     s: f64,
@@ -309,7 +335,7 @@ struct Kinematics {
     rod_dd0: [f64; 2],
     slider_dd0: f64,
     crank_dd0: [f64; 2],
-    /// The big end's x acceleration `−L2 ω² cos ωt` (m/s²).
+    /// The big end's x acceleration at `ë = 0`, `−L2 (θ̇2² cos θ2 + θ̈2 sin θ2)` (m/s²).
     big_end_x: f64,
     /// The slider's acceleration relative to the big end's x at `ë = 0`, `(s Ä_y − L3 θ̇3²)/c` (m/s²).
     along: f64,
@@ -328,6 +354,9 @@ struct Kinematics {
 pub struct SliderCrank {
     location: Location,
     k: Constants,
+    /// The crank's prescribed motion; its [`CrankDrive::varies`] picks the
+    /// right-hand side's variant.
+    drive: CrankDrive,
     bearing: Option<Bearing>,
     /// The instruction set of the right-hand side ([`Isa::detect`] by default).
     isa: Isa,
@@ -356,14 +385,20 @@ impl SliderCrank {
                 margin: f64::INFINITY,
             }
         });
+        let drive = case.drive();
+        let omega = match drive {
+            CrankDrive::Constant { omega } => omega,
+            _ => f64::NAN,
+        };
         Ok(Self {
             location: case.location,
             k: Constants::new(
                 mp,
                 case.location,
-                case.omega(),
+                omega,
                 if case.gravity { GRAVITY } else { 0.0 },
             ),
+            drive,
             bearing,
             isa: Isa::detect(),
             ledger: false,
@@ -372,7 +407,7 @@ impl SliderCrank {
 
     /// Turns the energy ledger on or off (docs/model.md §3.8): with it, a bearing
     /// case's state is `(ex, ey, ėx, ėy, W_driver, ∫∂V/∂t dt, E_dissipated)` and
-    /// the right-hand side also evaluates the driver's power `T ω`, the bearing's
+    /// the right-hand side also evaluates the driver's power `T θ̇2`, the bearing's
     /// `∂V/∂t` at fixed `e` and its dissipation, for the forces it applies (under a
     /// held regime, the regime's). The ideal mechanism has no state and no ledger.
     #[must_use]
@@ -397,13 +432,14 @@ impl SliderCrank {
     /// potential uses the natural law (a ball is loaded when `δ > 0`).
     pub fn energy(&mut self, t: f64, y: &[f64]) -> Result<Energy, ModelError> {
         let k = &self.k;
-        let crank = k.omega * t;
+        let motion = self.drive.motion(t);
+        let crank = motion.angle;
         let (e, ed) = match self.bearing {
             Some(_) => ([y[0], y[1]], [y[2], y[3]]),
             None => ([0.0; 2], [0.0; 2]),
         };
-        let kin = k.kinematics(crank.sin_cos(), e, ed)?;
-        let (kinetic, gravity) = k.body_energies(&kin, e, ed);
+        let kin = k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
+        let (kinetic, gravity) = k.body_energies(&kin, motion.rate, e, ed);
         let contact_potential = match &self.bearing {
             Some(w) => {
                 let state = self.contact_state(crank, &kin, e, ed);
@@ -441,34 +477,35 @@ impl SliderCrank {
         weights.contact_state(e, ed, journal, housing)
     }
 
-    /// The ledger's rates at `(t, y)` after [`SliderCrank::solve`] gave `kin` and
-    /// `edd`: the driver's power `T ω` (W), the bearing's `∂V/∂t` at fixed `e` (W)
-    /// and its dissipation (W), for the ball forces the right-hand side applied
+    /// The ledger's rates at `y` after [`SliderCrank::solve`] gave `motion`, `kin`
+    /// and `edd`: the driver's power `T θ̇2` (W), the bearing's `∂V/∂t` at fixed `e`
+    /// (W) and its dissipation (W), for the ball forces the right-hand side applied
     /// (the held regime's when `held`), ball by ball from the kernel's scalar twin.
-    fn ledger_rates(
+    fn ledger_rates<const VARYING: bool>(
         &self,
-        t: f64,
+        motion: &CrankMotion,
         y: &[f64],
         kin: &Kinematics,
         edd: [f64; 2],
         held: bool,
     ) -> [f64; 3] {
         let k = &self.k;
-        let torque = k.driver_torque(kin, &k.accelerations(kin, edd));
+        let torque = k.driver_torque::<VARYING>(kin, &k.accelerations(kin, edd), motion.accel);
+        let omega = motion.rate;
         let Some(w) = self.bearing.as_ref() else {
-            return [torque * k.omega, 0.0, 0.0];
+            return [torque * omega, 0.0, 0.0];
         };
-        let crank = k.omega * t;
+        let crank = motion.angle;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
         let state = self.contact_state(crank, kin, e, ed);
         // Race rates: the journal turns with the crank (crank_ground) or the rod
         // (crank_rod, θ̇3 = k_θ Ȧ_y), the housing with the ground or the crank.
         let (journal_rate, housing_rate) = match self.location {
             Location::CrankRod => {
-                let big_end_y = ed[1] + k.l2 * k.omega * kin.u[0];
-                (kin.k_theta * big_end_y, k.omega)
+                let big_end_y = ed[1] + k.l2 * omega * kin.u[0];
+                (kin.k_theta * big_end_y, omega)
             }
-            _ => (k.omega, 0.0),
+            _ => (omega, 0.0),
         };
         let cage_rate = w.weights.journal * journal_rate + w.weights.housing * housing_rate;
         let (psi_in_rate, psi_out_rate) = (cage_rate - journal_rate, cage_rate - housing_rate);
@@ -485,7 +522,7 @@ impl SliderCrank {
             rate += b.elastic * delta_rate;
             dissipation += (b.force - b.elastic) * b.approach;
         }
-        [torque * k.omega, rate, dissipation]
+        [torque * omega, rate, dissipation]
     }
 
     /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on
@@ -510,22 +547,39 @@ impl SliderCrank {
         vec![0.0; self.dim()]
     }
 
-    /// Kinematics, bearing force and `ë` at `(t, y)`, with the balls loaded as the
-    /// held regime says if `held` (else by the sign of `δ`); no force and `ë = 0`
-    /// for the ideal mechanism. Runs on lanes `V`; inlined into each instruction
-    /// set's version of its callers.
+    /// The crank's motion at `t` (s): `θ2 = ω t` at constant speed, else the drive's.
     #[inline(always)]
-    fn solve<V: Lanes>(
+    fn motion<const VARYING: bool>(&self, t: f64) -> CrankMotion {
+        if VARYING {
+            self.drive.motion(t)
+        } else {
+            CrankMotion {
+                angle: self.k.omega * t,
+                rate: self.k.omega,
+                accel: 0.0,
+            }
+        }
+    }
+
+    /// Crank motion, kinematics, bearing force and `ë` at `(t, y)`, with the balls
+    /// loaded as the held regime says if `held` (else by the sign of `δ`); no force
+    /// and `ë = 0` for the ideal mechanism. Runs on lanes `V`, with the crank's
+    /// acceleration terms when `VARYING`; inlined into each instruction set's
+    /// version of its callers.
+    #[inline(always)]
+    fn solve<V: Lanes, const VARYING: bool>(
         &mut self,
         t: f64,
         y: &[f64],
         held: bool,
-    ) -> Result<(Kinematics, BallSum, [f64; 2]), ModelError> {
+    ) -> Result<(CrankMotion, Kinematics, BallSum, [f64; 2]), ModelError> {
+        let motion = self.motion::<VARYING>(t);
         let k = &self.k;
-        let crank = k.omega * t;
+        let crank = motion.angle;
         let Some(w) = self.bearing.as_mut() else {
             return Ok((
-                k.kinematics(crank.sin_cos(), [0.0; 2], [0.0; 2])?,
+                motion,
+                k.kinematics::<VARYING>(crank.sin_cos(), &motion, [0.0; 2], [0.0; 2])?,
                 BallSum::default(),
                 [0.0; 2],
             ));
@@ -540,34 +594,47 @@ impl SliderCrank {
             Location::CrankGround => {
                 let state = w.weights.contact_state(e, ed, crank, 0.0);
                 let (sum, trig) = w.balls.evaluate::<V>(&state, regime, Some(crank));
-                (k.kinematics(trig, e, ed)?, sum)
+                (k.kinematics::<VARYING>(trig, &motion, e, ed)?, sum)
             }
             // The journal turns with the rod, whose angle needs the crank's first.
             _ => {
-                let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+                let kin = k.kinematics::<VARYING>(crank.sin_cos(), &motion, e, ed)?;
                 let (journal, housing) = race_turns(self.location, crank, &kin);
                 let state = w.weights.contact_state(e, ed, journal, housing);
                 (kin, w.balls.evaluate::<V>(&state, regime, None).0)
             }
         };
         w.margin = sum.margin;
-        Ok((kin, sum, k.eccentricity_acceleration(&kin, sum.force)))
+        Ok((
+            motion,
+            kin,
+            sum,
+            k.eccentricity_acceleration(&kin, sum.force),
+        ))
     }
 
     /// Evaluates the outputs of docs/model.md §5.2 at time `t` (s) and state `y`.
     /// The natural law applies (a ball is loaded when `δ > 0`) whatever regime an
     /// integrator holds.
     pub fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
-        dispatch(self.isa, SampleTask { sys: self, t, y })
+        if self.drive.varies() {
+            dispatch(self.isa, SampleTask::<true> { sys: self, t, y })
+        } else {
+            dispatch(self.isa, SampleTask::<false> { sys: self, t, y })
+        }
     }
 
     /// [`SliderCrank::sample`] on lanes `V`.
     #[inline(always)]
-    fn sample_in<V: Lanes>(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
-        let (kin, sum, edd) = self.solve::<V>(t, y, false)?;
+    fn sample_in<V: Lanes, const VARYING: bool>(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Sample, ModelError> {
+        let (motion, kin, sum, edd) = self.solve::<V, VARYING>(t, y, false)?;
         let k = self.k;
         let acc = k.accelerations(&kin, edd);
-        let crank_moment = k.driver_torque(&kin, &acc);
+        let crank_moment = k.driver_torque::<VARYING>(&kin, &acc, motion.accel);
         let Accelerations {
             theta_dd,
             rod_dd,
@@ -625,29 +692,54 @@ impl OdeSystem for SliderCrank {
             return Ok(());
         }
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
+        let (isa, varies) = (self.isa, self.drive.varies());
         if self.ledger {
-            let (edd, rates) = dispatch(
-                self.isa,
-                LedgerTask {
+            let (edd, rates) = if varies {
+                dispatch(
+                    isa,
+                    LedgerTask::<true> {
+                        sys: self,
+                        t,
+                        y,
+                        held,
+                    },
+                )
+            } else {
+                dispatch(
+                    isa,
+                    LedgerTask::<false> {
+                        sys: self,
+                        t,
+                        y,
+                        held,
+                    },
+                )
+            }?;
+            dydt[..4].copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+            dydt[4..4 + LEDGER_LEN].copy_from_slice(&rates);
+            return Ok(());
+        }
+        let edd = if varies {
+            dispatch(
+                isa,
+                RhsTask::<true> {
                     sys: self,
                     t,
                     y,
                     held,
                 },
-            )?;
-            dydt[..4].copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
-            dydt[4..4 + LEDGER_LEN].copy_from_slice(&rates);
-            return Ok(());
-        }
-        let edd = dispatch(
-            self.isa,
-            RhsTask {
-                sys: self,
-                t,
-                y,
-                held,
-            },
-        )?;
+            )
+        } else {
+            dispatch(
+                isa,
+                RhsTask::<false> {
+                    sys: self,
+                    t,
+                    y,
+                    held,
+                },
+            )
+        }?;
         dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
         Ok(())
     }
@@ -657,9 +749,10 @@ impl OdeSystem for SliderCrank {
             return Ok(false);
         }
         let k = &self.k;
-        let crank = k.omega * t;
+        let motion = self.drive.motion(t);
+        let crank = motion.angle;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
-        let kin = k.kinematics(crank.sin_cos(), e, ed)?;
+        let kin = k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
         let (journal_turn, housing_turn) = race_turns(self.location, crank, &kin);
         let Some(w) = self.bearing.as_mut() else {
             return Ok(false);
@@ -682,56 +775,60 @@ impl OdeSystem for SliderCrank {
     }
 }
 
-/// `ë` (m/s²) of [`OdeSystem::rhs`] as a [`LaneTask`].
-struct RhsTask<'a> {
+/// `ë` (m/s²) of [`OdeSystem::rhs`] as a [`LaneTask`], with the crank's
+/// acceleration terms when `VARYING`.
+struct RhsTask<'a, const VARYING: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
     y: &'a [f64],
     held: bool,
 }
 
-impl LaneTask for RhsTask<'_> {
+impl<const VARYING: bool> LaneTask for RhsTask<'_, VARYING> {
     type Output = Result<[f64; 2], ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        Ok(self.sys.solve::<V>(self.t, self.y, self.held)?.2)
+        Ok(self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?.3)
     }
 }
 
 /// `ë` (m/s²) and the ledger's rates of [`OdeSystem::rhs`] with the ledger on, as a
-/// [`LaneTask`].
-struct LedgerTask<'a> {
+/// [`LaneTask`], with the crank's acceleration terms when `VARYING`.
+struct LedgerTask<'a, const VARYING: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
     y: &'a [f64],
     held: bool,
 }
 
-impl LaneTask for LedgerTask<'_> {
+impl<const VARYING: bool> LaneTask for LedgerTask<'_, VARYING> {
     type Output = Result<([f64; 2], [f64; LEDGER_LEN]), ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        let (kin, _, edd) = self.sys.solve::<V>(self.t, self.y, self.held)?;
-        let rates = self.sys.ledger_rates(self.t, self.y, &kin, edd, self.held);
+        let (motion, kin, _, edd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
+        let rates = self
+            .sys
+            .ledger_rates::<VARYING>(&motion, self.y, &kin, edd, self.held);
         Ok((edd, rates))
     }
 }
 
-/// [`SliderCrank::sample`] as a [`LaneTask`].
-struct SampleTask<'a> {
+/// [`SliderCrank::sample`] as a [`LaneTask`], with the crank's acceleration terms
+/// when `VARYING`.
+struct SampleTask<'a, const VARYING: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
     y: &'a [f64],
 }
 
-impl LaneTask for SampleTask<'_> {
+impl<const VARYING: bool> LaneTask for SampleTask<'_, VARYING> {
     type Output = Result<Sample, ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        self.sys.sample_in::<V>(self.t, self.y)
+        self.sys.sample_in::<V, VARYING>(self.t, self.y)
     }
 }
 

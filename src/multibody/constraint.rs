@@ -6,9 +6,10 @@
 //! `Φq q̈ = γ` along any motion that satisfies the constraint.
 
 use super::body::{BodyRef, Pose};
+use crate::mechanism::CrankDrive;
 
 /// One joint or driver.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Constraint {
     /// Ideal revolute joint (2 rows): the point `s_j` of body `j` coincides with
     /// the point `s_i` of body `i`, `r_j + A_j s_j − r_i − A_i s_i = 0` (m).
@@ -40,14 +41,15 @@ pub enum Constraint {
         /// Relative angle `θ_j − θ_i` held (rad).
         theta0: f64,
     },
-    /// Rheonomic driver (1 row): `θ_body − θ_0 − ω t = 0` (rad).
+    /// Rheonomic driver (1 row): `θ_body − θ_0 − θ(t) = 0` (rad), with `θ(t)` the
+    /// drive's angle (`ω t` at constant speed).
     Driver {
         /// The driven body (never the ground).
         body: BodyRef,
         /// Angle at `t = 0` (rad).
         theta0: f64,
-        /// Constant angular speed (rad/s).
-        omega: f64,
+        /// The prescribed motion `θ(t)`, `θ̇(t)`, `θ̈(t)`.
+        drive: CrankDrive,
     },
 }
 
@@ -84,6 +86,15 @@ impl Constraint {
     /// Writes `Φ` and `Φq` at positions `q` and time `t` (s).
     pub(crate) fn position(&self, t: f64, q: &[f64], out: &mut Rows<'_>) {
         match *self {
+            Constraint::Driver {
+                body,
+                theta0,
+                ref drive,
+            } => {
+                let p = Pose::at(body, q);
+                out.phi[0] = p.theta - theta0 - drive.motion(t).angle;
+                out.add(0, body, 0.0, 0.0, 1.0);
+            }
             Constraint::Revolute { i, s_i, j, s_j } => {
                 let (pi, pj) = (Pose::at(i, q), Pose::at(j, q));
                 let (ai, aj) = (pi.rotate(s_i), pj.rotate(s_j));
@@ -118,28 +129,20 @@ impl Constraint {
                 out.add(1, j, n[0], n[1], -n[0] * aj[1] + n[1] * aj[0]);
                 out.add(1, i, -n[0], -n[1], dn_d + n[0] * ai[1] - n[1] * ai[0]);
             }
-            Constraint::Driver {
-                body,
-                theta0,
-                omega,
-            } => {
-                let p = Pose::at(body, q);
-                out.phi[0] = p.theta - theta0 - omega * t;
-                out.add(0, body, 0.0, 0.0, 1.0);
-            }
         }
     }
 
-    /// Writes `Φt`, the explicit time derivative of `Φ` (rad/s for the driver, else 0).
-    pub(crate) fn time_derivative(&self, phit: &mut [f64]) {
-        match *self {
-            Constraint::Driver { omega, .. } => phit[0] = -omega,
+    /// Writes `Φt` at time `t` (s), the explicit time derivative of `Φ` (rad/s for
+    /// the driver, `−θ̇(t)`, else 0).
+    pub(crate) fn time_derivative(&self, t: f64, phit: &mut [f64]) {
+        match self {
+            Constraint::Driver { drive, .. } => phit[0] = -drive.motion(t).rate,
             _ => phit.iter_mut().for_each(|p| *p = 0.0),
         }
     }
 
-    /// Writes `γ` for positions `q` and velocities `qd`.
-    pub(crate) fn gamma(&self, q: &[f64], qd: &[f64], gamma: &mut [f64]) {
+    /// Writes `γ` at time `t` (s) for positions `q` and velocities `qd`.
+    pub(crate) fn gamma(&self, t: f64, q: &[f64], qd: &[f64], gamma: &mut [f64]) {
         match *self {
             Constraint::Revolute { i, s_i, j, s_j } => {
                 let (pi, pj) = (Pose::of(i, q, qd), Pose::of(j, q, qd));
@@ -172,7 +175,8 @@ impl Constraint {
                     + wj * wj * (n[0] * aj[0] + n[1] * aj[1])
                     - wi * wi * (n[0] * ai[0] + n[1] * ai[1]);
             }
-            Constraint::Driver { .. } => gamma[0] = 0.0,
+            // Φtt = −θ̈(t), so γ = θ̈(t).
+            Constraint::Driver { ref drive, .. } => gamma[0] = drive.motion(t).accel,
         }
     }
 }

@@ -291,7 +291,7 @@ impl<F: ForceElement> System<F> {
             // A fully constrained system has no trial states: every evaluation is real.
             self.ws.q_anchor.copy_from_slice(&self.ws.q);
         }
-        self.solve_velocities();
+        self.solve_velocities(t);
         self.solve_accelerations(t)?;
         if multipliers {
             self.solve_multipliers();
@@ -344,7 +344,7 @@ impl<F: ForceElement> System<F> {
         let n = ws.q.len();
         for (k, c) in self.constraints.iter().enumerate() {
             let r0 = self.row_start[k];
-            c.time_derivative(&mut ws.phit[r0..r0 + c.rows()]);
+            c.time_derivative(t, &mut ws.phit[r0..r0 + c.rows()]);
         }
         (0..ws.phi.len())
             .map(|r| {
@@ -413,13 +413,13 @@ impl<F: ForceElement> System<F> {
         })
     }
 
-    /// `Φu u̇ = −Φz ż − Φt`, with `Φu` factored by [`Self::solve_positions`].
-    fn solve_velocities(&mut self) {
+    /// `Φu u̇ = −Φz ż − Φt` at time `t` (s), with `Φu` factored by [`Self::solve_positions`].
+    fn solve_velocities(&mut self, t: f64) {
         let ws = &mut self.ws;
         let n = ws.q.len();
         for (k, c) in self.constraints.iter().enumerate() {
             let r0 = self.row_start[k];
-            c.time_derivative(&mut ws.phit[r0..r0 + c.rows()]);
+            c.time_derivative(t, &mut ws.phit[r0..r0 + c.rows()]);
         }
         for r in 0..self.dependent.len() {
             let row = &ws.jac[r * n..(r + 1) * n];
@@ -456,7 +456,7 @@ impl<F: ForceElement> System<F> {
         let n = ws.q.len();
         for (k, c) in self.constraints.iter().enumerate() {
             let r0 = self.row_start[k];
-            c.gamma(&ws.q, &ws.qd, &mut ws.gamma[r0..r0 + c.rows()]);
+            c.gamma(t, &ws.q, &ws.qd, &mut ws.gamma[r0..r0 + c.rows()]);
         }
         // B_u = −Φu⁻¹ Φz and c_u = Φu⁻¹ γ.
         for (a, &kz) in self.independent.iter().enumerate() {

@@ -72,12 +72,26 @@ impl VarSpec {
 }
 
 /// The values of a parameter, one per case (or per reference).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub enum ParamValues {
     /// Numbers, stored as f64 (in the parameter's units).
     F64(Vec<f64>),
     /// Labels, stored as variable-length UTF-8 strings (no NUL bytes).
     Str(Vec<String>),
+}
+
+/// Values are equal when they hold the same bits: a NaN (a parameter a case does
+/// not have, e.g. `speed_from` at constant speed) equals the same NaN.
+impl PartialEq for ParamValues {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (ParamValues::F64(a), ParamValues::F64(b)) => {
+                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+            }
+            (ParamValues::Str(a), ParamValues::Str(b)) => a == b,
+            _ => false,
+        }
+    }
 }
 
 impl ParamValues {

@@ -1,5 +1,6 @@
 //! The study file's [`Layout`] for a study (or a shard of it).
 
+use crate::mechanism::CaseParams;
 use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
@@ -42,6 +43,18 @@ impl StudyFingerprint {
     }
 }
 
+/// What `speed_profile` and `reference_speed_profile` hold.
+const PROFILE_DESCRIPTION: &str =
+    "crank speed profile: constant (rpm), ramp, sine (speed_*) or table (knots in the grid file)";
+
+/// The name of a case's speed profile, `constant` for `rpm`.
+fn profile_name(p: &CaseParams) -> String {
+    p.speed
+        .as_ref()
+        .map_or("constant", |s| s.name())
+        .to_string()
+}
+
 /// The layout of the file for the cases at `rows` (indices into `study.cases`), the
 /// whole study or `shard` of it.
 pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layout {
@@ -77,10 +90,20 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             values: ParamValues::F64(cases.iter().map(|c| (c.id % d.rows) as f64).collect()),
         });
     }
-    let reference_parameters = vec![Param {
-        spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
-        values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
-    }];
+    parameters.push(Param {
+        spec: VarSpec::new("speed_profile", "1", PROFILE_DESCRIPTION),
+        values: ParamValues::Str(cases.iter().map(|c| profile_name(&c.params)).collect()),
+    });
+    let reference_parameters = vec![
+        Param {
+            spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
+            values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
+        },
+        Param {
+            spec: VarSpec::new("reference_speed_profile", "1", PROFILE_DESCRIPTION),
+            values: ParamValues::Str(study.references.iter().map(profile_name).collect()),
+        },
+    ];
     let mut attributes = provenance();
     let shard_rows = rows.len();
     attributes.extend([

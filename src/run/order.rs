@@ -11,15 +11,16 @@
 use crate::study::Study;
 
 /// Orders `pending` (positions in `rows`, which index `study.cases`) for the workers:
-/// the most crank revolutions first (every case of a study simulates the same time,
+/// the most crank revolutions first, by the shortest first revolution (every case of a
+/// study simulates the same time,
 /// and contacts, load-zone passes and waviness passes come per revolution, so the
 /// integrator's steps grow with the speed), ties in reverse grid order. The tie rule
 /// assumes what is usual, not required: that a grid lists its values in ascending
 /// order, so that its costly cases (higher speed, larger waviness amplitude, more
 /// balls; the bearing at crank_rod, listed after crank_ground) tend to come last.
 pub(super) fn dispatch_order(study: &Study, rows: &[usize], pending: &mut [usize]) {
-    let rpm = |position: usize| study.cases[rows[position]].params.rpm;
-    pending.sort_by(|&a, &b| rpm(b).total_cmp(&rpm(a)).then(b.cmp(&a)));
+    let revolution = |position: usize| study.cases[rows[position]].params.revolution_time();
+    pending.sort_by(|&a, &b| revolution(a).total_cmp(&revolution(b)).then(b.cmp(&a)));
 }
 
 #[cfg(test)]

@@ -54,6 +54,9 @@ pub struct GridFile {
     /// Crank speed when not a grid axis.
     #[serde(default)]
     pub rpm: Option<S<Scalar>>,
+    /// A varying crank speed, instead of `rpm`.
+    #[serde(default)]
+    pub speed: Option<S<SpeedSection>>,
     /// Bearing location when not a grid axis.
     #[serde(default)]
     pub location: Option<S<Scalar>>,
@@ -83,10 +86,39 @@ pub struct GridFile {
     pub zip: Vec<S<Axes>>,
     /// Explicit extra cases: parameter → value, over the base.
     #[serde(default)]
-    pub cases: Vec<S<IndexMap<String, S<Scalar>>>>,
+    pub cases: Vec<S<IndexMap<String, S<CaseValue>>>>,
     /// A sampled design, repeated at every grid point and explicit case.
     #[serde(default)]
     pub design: Option<S<DesignSection>>,
+}
+
+/// One value of an explicit case: a scalar parameter, or a `speed:` profile.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum CaseValue {
+    /// A scalar parameter or `location`.
+    Scalar(Scalar),
+    /// `speed:`.
+    Speed(SpeedSection),
+}
+
+/// `speed:`: a crank speed profile (docs/grid-file.md). Which fields a profile takes
+/// is checked when the study is built; the whole section carries one place in the
+/// file (it may sit inside `cases:`, where serde keeps no inner places).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct SpeedSection {
+    /// `ramp`, `sine` or `table`.
+    pub profile: String,
+    pub from: Option<Scalar>,
+    pub to: Option<Scalar>,
+    pub over: Option<Scalar>,
+    pub mean: Option<Scalar>,
+    pub amplitude: Option<Scalar>,
+    pub frequency: Option<Scalar>,
+    pub time: Option<Vec<Scalar>>,
+    pub rpm: Option<Vec<Scalar>>,
 }
 
 /// `design:`: points drawn over parameter ranges (see [`crate::study::design`]).

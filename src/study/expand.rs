@@ -6,7 +6,8 @@ use std::path::Path;
 use serde_saphyr::Location;
 
 use super::config::{
-    BandValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection, WavinessSection, S,
+    BandValue, CaseValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection,
+    SpeedSection, WavinessSection, S,
 };
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -16,7 +17,7 @@ use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 mod design;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
-use crate::mechanism::{CaseParams, Location as Site};
+use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
@@ -171,6 +172,7 @@ impl Ctx<'_> {
                 ),
             )
         })?;
+        check_speed(case, param.name).map_err(|m| self.err(Some(place), field, m))?;
         let x = self.quantity(v, param.dimension, field)?;
         if param.integer && (x.fract() != 0.0 || x < 0.0 || x > u32::MAX as f64) {
             let rule = if param.name == "ball_count" {
@@ -194,6 +196,133 @@ impl Ctx<'_> {
             return Err(self.err(Some(place), field, rule));
         }
         Ok(Target::Param(param, x))
+    }
+}
+
+impl Ctx<'_> {
+    /// A `speed:` section written at `loc` under the name `prefix` (`speed`,
+    /// `cases[2].speed`) as a checked profile; records where its scalar fields came
+    /// from in `prov`.
+    fn speed(
+        &self,
+        s: &SpeedSection,
+        loc: &Location,
+        prefix: &str,
+        prov: &mut Provenance,
+    ) -> Result<SpeedProfile, StudyError> {
+        let place = Some(at(loc));
+        let fields: &[&str] = match s.profile.as_str() {
+            "ramp" => &["from", "to", "over"],
+            "sine" => &["mean", "amplitude", "frequency"],
+            "table" => &["time", "rpm"],
+            other => {
+                return Err(self.err(
+                    place,
+                    &format!("{prefix}.profile"),
+                    format!("unknown profile `{other}`; expected ramp, sine or table"),
+                ))
+            }
+        };
+        let profile = s.profile.as_str();
+        let given = [
+            ("from", s.from.is_some()),
+            ("to", s.to.is_some()),
+            ("over", s.over.is_some()),
+            ("mean", s.mean.is_some()),
+            ("amplitude", s.amplitude.is_some()),
+            ("frequency", s.frequency.is_some()),
+            ("time", s.time.is_some()),
+            ("rpm", s.rpm.is_some()),
+        ];
+        for (key, present) in given {
+            let takes = fields.contains(&key);
+            if present != takes {
+                let why = if present {
+                    format!("`{key}` is not a field of the {profile} profile")
+                } else {
+                    format!("the {profile} profile needs `{key}`")
+                };
+                return Err(self.err(
+                    place,
+                    &format!("{prefix}.{key}"),
+                    format!("{why}; it takes {}", fields.join(", ")),
+                ));
+            }
+        }
+        let one = |v: &Option<Scalar>, dim: Dimension, key: &str| {
+            let v = S::new(v.clone().unwrap_or(Scalar::Num(f64::NAN)), *loc, *loc);
+            self.quantity(&v, dim, &format!("{prefix}.{key}"))
+        };
+        let list = |v: &Option<Vec<Scalar>>, dim: Dimension, key: &str| {
+            v.iter()
+                .flatten()
+                .enumerate()
+                .map(|(k, x)| {
+                    let x = S::new(x.clone(), *loc, *loc);
+                    self.quantity(&x, dim, &format!("{prefix}.{key}[{k}]"))
+                })
+                .collect::<Result<Vec<f64>, StudyError>>()
+        };
+        let p = match profile {
+            "ramp" => SpeedProfile::Ramp {
+                from: one(&s.from, Dimension::Speed, "from")?,
+                to: one(&s.to, Dimension::Speed, "to")?,
+                over: one(&s.over, Dimension::Time, "over")?,
+            },
+            "sine" => SpeedProfile::Sine {
+                mean: one(&s.mean, Dimension::Speed, "mean")?,
+                amplitude: one(&s.amplitude, Dimension::Speed, "amplitude")?,
+                frequency: one(&s.frequency, Dimension::Frequency, "frequency")?,
+            },
+            _ => SpeedProfile::Table {
+                time: list(&s.time, Dimension::Time, "time")?,
+                rpm: list(&s.rpm, Dimension::Speed, "rpm")?,
+            },
+        };
+        p.validate().map_err(|e| {
+            let field = e.field.replacen("speed", prefix, 1);
+            self.err(
+                place,
+                &field,
+                format!("{} is not allowed: {}", e.value, e.allowed),
+            )
+        })?;
+        for key in fields {
+            if let Some(param) = lookup(&format!("speed_{key}")) {
+                prov.push((param.name, format!("{prefix}.{key}"), at(loc)));
+            }
+        }
+        Ok(p)
+    }
+}
+
+/// Why `param` cannot be set in `case`: `rpm` where the case has a `speed:`
+/// profile, a `speed_*` axis of another profile than the case's.
+fn check_speed(case: &CaseParams, param: &str) -> Result<(), String> {
+    let has = case.speed.as_ref().map(SpeedProfile::name);
+    let needs = match param {
+        "speed_from" | "speed_to" | "speed_over" => "ramp",
+        "speed_mean" | "speed_amplitude" | "speed_frequency" => "sine",
+        "rpm" => match has {
+            Some(p) => {
+                return Err(format!(
+                    "rpm and speed both given: the case's speed is a {p} profile (`speed:`); \
+                     give one of them"
+                ))
+            }
+            None => return Ok(()),
+        },
+        _ => return Ok(()),
+    };
+    match has {
+        Some(p) if p == needs => Ok(()),
+        _ => Err(format!(
+            "{param} sets a field of the {needs} profile, and the case's speed is {}; \
+             give `speed: {{profile: {needs}, ...}}`",
+            has.map_or("the constant `rpm`".to_string(), |p| format!(
+                "a {p} profile"
+            ))
+        )),
     }
 }
 
@@ -592,6 +721,17 @@ fn expand_explicit(
 ) -> Result<(), StudyError> {
     let rows = design.map_or(1, |g| g[0].values.len());
     for (c, explicit) in file.cases.iter().enumerate() {
+        if let (Some(rpm), true) = (
+            explicit.value.get("rpm"),
+            explicit.value.contains_key("speed"),
+        ) {
+            return Err(ctx.err(
+                Some(at(&rpm.referenced)),
+                &format!("cases[{c}].rpm"),
+                "rpm and speed both given; give either `rpm` (a constant speed) or `speed` \
+                 (a profile)",
+            ));
+        }
         for row in 0..rows {
             let mut params = base.clone();
             let mut case_prov = prov.clone();
@@ -602,7 +742,24 @@ fn expand_explicit(
             }
             for (name, value) in &explicit.value {
                 let field = format!("cases[{c}].{name}");
-                ctx.apply(&mut params, name, value, &field, effects, &mut case_prov)?;
+                match &value.value {
+                    CaseValue::Scalar(x) => {
+                        let v = S::new(x.clone(), value.referenced, value.defined);
+                        ctx.apply(&mut params, name, &v, &field, effects, &mut case_prov)?;
+                    }
+                    CaseValue::Speed(sp) if name == "speed" => {
+                        params.speed =
+                            Some(ctx.speed(sp, &value.referenced, &field, &mut case_prov)?);
+                        params.rpm = f64::NAN;
+                    }
+                    CaseValue::Speed(_) => {
+                        return Err(ctx.err(
+                            Some(at(&value.referenced)),
+                            &field,
+                            format!("`{name}` takes a single value; only `speed` takes a mapping"),
+                        ))
+                    }
+                }
             }
             let id = cases.len() as u64;
             cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
@@ -626,25 +783,25 @@ fn assign_references(cases: &mut [Case]) -> Vec<CaseParams> {
     references
 }
 
-/// The start of the analysed window (s): the grid's `transient`, or `auto` (one
-/// revolution at the slowest speed, at most half the duration); it must leave two
-/// samples for the spectra and metrics.
+/// The start of the analysed window (s): the grid's `transient`, or `auto` (the
+/// longest first crank revolution of any case, at most half the duration); it must
+/// leave two samples for the spectra and metrics.
 fn transient_of(
     ctx: &Ctx<'_>,
     file: &GridFile,
     sampling: &Sampling,
     cases: &[Case],
 ) -> Result<f64, StudyError> {
-    let min_rpm = cases
+    let revolution = cases
         .iter()
-        .map(|c| c.params.rpm)
-        .fold(f64::INFINITY, f64::min);
+        .map(|c| c.params.revolution_time())
+        .fold(0.0, f64::max);
     let transient = match &file.transient {
-        None => (60.0 / min_rpm).min(0.5 * sampling.duration),
+        None => revolution.min(0.5 * sampling.duration),
         Some(S {
             value: Scalar::Text(t),
             ..
-        }) if t == "auto" => (60.0 / min_rpm).min(0.5 * sampling.duration),
+        }) if t == "auto" => revolution.min(0.5 * sampling.duration),
         Some(v) => {
             let x = ctx.quantity(v, Dimension::Time, "transient")?;
             if !(0.0..sampling.duration).contains(&x) {
@@ -871,9 +1028,10 @@ fn reference_of(p: &CaseParams) -> CaseParams {
     }
 }
 
-/// What an ideal mechanism depends on: its bodies, speed and gravity. Destructured in
-/// full, so that a new parameter cannot be left out unnoticed.
-type ReferenceKey = ([u64; 9], bool);
+/// What an ideal mechanism depends on: its bodies, speed (with the profile's numbers)
+/// and gravity. Destructured in full, so that a new parameter cannot be left out
+/// unnoticed.
+type ReferenceKey = ([u64; 9], Option<Vec<u64>>, bool);
 
 fn reference_key(p: &CaseParams) -> ReferenceKey {
     let CaseParams {
@@ -881,6 +1039,7 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
         bearing: _,
         location: _,
         rpm,
+        speed,
         gravity,
     } = p;
     let crate::mechanism::MechanismParams {
@@ -906,6 +1065,7 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
             bits(slider_inertia),
             bits(rpm),
         ],
+        speed.as_ref().map(SpeedProfile::key),
         *gravity,
     )
 }
@@ -913,7 +1073,9 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
 /// Whether the parameter called `name` changes the ideal mechanism (and so the
 /// references): the speed and the bodies.
 fn shapes_reference(name: &str) -> bool {
-    name == "rpm" || lookup(name).is_some_and(|p| p.field.starts_with("mechanism."))
+    lookup(name).is_some_and(|p| {
+        p.name == "rpm" || p.field.starts_with("speed.") || p.field.starts_with("mechanism.")
+    })
 }
 
 /// Refuses a value an axis already has (a grid axis), or a row a zip group already
@@ -1146,7 +1308,8 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
     Ok(e)
 }
 
-/// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` and `location:`.
+/// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` or
+/// `speed:`, and `location:`.
 fn base_case(
     ctx: &Ctx<'_>,
     file: &GridFile,
@@ -1224,7 +1387,21 @@ fn base_case(
             }
         }
     }
-    set(&mut c, "rpm", &file.rpm, "rpm", prov)?;
+    match (&file.speed, &file.rpm) {
+        (Some(_), Some(rpm)) => {
+            return Err(ctx.err(
+                Some(at(&rpm.referenced)),
+                "rpm",
+                "rpm and speed both given; give either `rpm` (a constant speed) or `speed` \
+                 (a profile)",
+            ))
+        }
+        (Some(speed), None) => {
+            c.speed = Some(ctx.speed(&speed.value, &speed.referenced, "speed", prov)?);
+            c.rpm = f64::NAN;
+        }
+        (None, rpm) => set(&mut c, "rpm", rpm, "rpm", prov)?,
+    }
     set(&mut c, "location", &file.location, "location", prov)?;
     Ok(c)
 }

@@ -4,7 +4,7 @@
 
 use super::units::Dimension;
 use crate::bearing::{Harmonic, RaceWaviness};
-use crate::mechanism::CaseParams;
+use crate::mechanism::{CaseParams, SpeedProfile};
 
 /// One scalar case parameter.
 #[derive(Clone, Copy)]
@@ -70,6 +70,48 @@ fn both(c: &CaseParams, f: fn(&Harmonic) -> f64) -> f64 {
     }
 }
 
+/// A field of the ramp profile, NaN for any other speed.
+fn ramp(c: &CaseParams, f: fn(f64, f64, f64) -> f64) -> f64 {
+    match c.speed {
+        Some(SpeedProfile::Ramp { from, to, over }) => f(from, to, over),
+        _ => f64::NAN,
+    }
+}
+
+/// A field of the sine profile, NaN for any other speed.
+fn sine(c: &CaseParams, f: fn(f64, f64, f64) -> f64) -> f64 {
+    match c.speed {
+        Some(SpeedProfile::Sine {
+            mean,
+            amplitude,
+            frequency,
+        }) => f(mean, amplitude, frequency),
+        _ => f64::NAN,
+    }
+}
+
+/// The ramp profile's fields, when the case has one (the study refuses a
+/// `speed_from/to/over` axis for any other speed).
+fn ramp_mut(c: &mut CaseParams) -> Option<(&mut f64, &mut f64, &mut f64)> {
+    match &mut c.speed {
+        Some(SpeedProfile::Ramp { from, to, over }) => Some((from, to, over)),
+        _ => None,
+    }
+}
+
+/// The sine profile's fields, when the case has one (the study refuses a
+/// `speed_mean/amplitude/frequency` axis for any other speed).
+fn sine_mut(c: &mut CaseParams) -> Option<(&mut f64, &mut f64, &mut f64)> {
+    match &mut c.speed {
+        Some(SpeedProfile::Sine {
+            mean,
+            amplitude,
+            frequency,
+        }) => Some((mean, amplitude, frequency)),
+        _ => None,
+    }
+}
+
 macro_rules! param {
     ($name:literal, $field:literal, $dim:ident, $int:literal, $long:literal, |$c:ident| $get:expr, |$s:ident, $v:ident| $set:expr) => {
         ParamDef {
@@ -86,6 +128,8 @@ macro_rules! param {
 
 /// Every scalar parameter, in file order. `waviness_*` set both races' first
 /// harmonic; in files they hold the common value (NaN where the races differ).
+/// `rpm` is NaN for a case with a `speed:` profile, and the `speed_*` of a profile
+/// are NaN for any other speed.
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
@@ -104,6 +148,72 @@ pub const PARAMETERS: &[ParamDef] = &[
         "crank speed",
         |c| c.rpm,
         |c, v| c.rpm = v
+    ),
+    param!(
+        "speed_from",
+        "speed.from",
+        Speed,
+        false,
+        "crank speed at t = 0 of a ramp",
+        |c| ramp(c, |from, _, _| from),
+        |c, v| if let Some((from, _, _)) = ramp_mut(c) {
+            *from = v
+        }
+    ),
+    param!(
+        "speed_to",
+        "speed.to",
+        Speed,
+        false,
+        "crank speed at the end of a ramp",
+        |c| ramp(c, |_, to, _| to),
+        |c, v| if let Some((_, to, _)) = ramp_mut(c) {
+            *to = v
+        }
+    ),
+    param!(
+        "speed_over",
+        "speed.over",
+        Time,
+        false,
+        "duration of a ramp",
+        |c| ramp(c, |_, _, over| over),
+        |c, v| if let Some((_, _, over)) = ramp_mut(c) {
+            *over = v
+        }
+    ),
+    param!(
+        "speed_mean",
+        "speed.mean",
+        Speed,
+        false,
+        "mean crank speed of a sine",
+        |c| sine(c, |mean, _, _| mean),
+        |c, v| if let Some((mean, _, _)) = sine_mut(c) {
+            *mean = v
+        }
+    ),
+    param!(
+        "speed_amplitude",
+        "speed.amplitude",
+        Speed,
+        false,
+        "crank speed amplitude of a sine",
+        |c| sine(c, |_, amplitude, _| amplitude),
+        |c, v| if let Some((_, amplitude, _)) = sine_mut(c) {
+            *amplitude = v
+        }
+    ),
+    param!(
+        "speed_frequency",
+        "speed.frequency",
+        Frequency,
+        false,
+        "frequency of a sine's speed fluctuation",
+        |c| sine(c, |_, _, frequency| frequency),
+        |c, v| if let Some((_, _, frequency)) = sine_mut(c) {
+            *frequency = v
+        }
     ),
     param!(
         "clearance",
