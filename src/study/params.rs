@@ -3,7 +3,7 @@
 //! [`CaseParams`].
 
 use super::units::Dimension;
-use crate::bearing::{Harmonic, RaceWaviness};
+use crate::bearing::{Defect, Harmonic, RaceWaviness};
 use crate::mechanism::CaseParams;
 
 /// One scalar case parameter.
@@ -70,6 +70,11 @@ fn both(c: &CaseParams, f: fn(&Harmonic) -> f64) -> f64 {
     }
 }
 
+/// A field of the case's first defect, NaN without one.
+fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
+    c.bearing.defects.first().map_or(f64::NAN, f)
+}
+
 macro_rules! param {
     ($name:literal, $field:literal, $dim:ident, $int:literal, $long:literal, |$c:ident| $get:expr, |$s:ident, $v:ident| $set:expr) => {
         ParamDef {
@@ -86,6 +91,8 @@ macro_rules! param {
 
 /// Every scalar parameter, in file order. `waviness_*` set both races' first
 /// harmonic; in files they hold the common value (NaN where the races differ).
+/// `defect_*` act on the first defect (created, of zero depth, if absent); in files
+/// they hold its values (NaN without defects).
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
@@ -239,6 +246,33 @@ pub const PARAMETERS: &[ParamDef] = &[
         "outer race waviness offset Pi_T",
         |c| c.bearing.outer_waviness.offset,
         |c, v| c.bearing.outer_waviness.offset = v
+    ),
+    param!(
+        "defect_angle",
+        "bearing.defects[0].angle",
+        Angle,
+        false,
+        "angle of the first defect in the frame of its race's body (ball: on ball 0)",
+        |c| first_defect_value(c, |d| d.angle),
+        |c, v| Defect::first(&mut c.bearing.defects).angle = v
+    ),
+    param!(
+        "defect_width",
+        "bearing.defects[0].width",
+        Length,
+        false,
+        "width of the first defect along its surface",
+        |c| first_defect_value(c, |d| d.width),
+        |c, v| Defect::first(&mut c.bearing.defects).width = v
+    ),
+    param!(
+        "defect_depth",
+        "bearing.defects[0].depth",
+        Length,
+        false,
+        "depth of the first defect",
+        |c| first_defect_value(c, |d| d.depth),
+        |c, v| Defect::first(&mut c.bearing.defects).depth = v
     ),
     param!(
         "inner_race_diameter",
