@@ -366,6 +366,22 @@ pub const PARAMETERS: &[ParamDef] = &[
     ),
 ];
 
+/// The value of grid axis `name` in `case`, as text: a scalar parameter's value in
+/// its base unit, or the name of the location or of the first defect's race
+/// (`none` without defects).
+pub fn axis_value(name: &str, case: &CaseParams) -> String {
+    match (lookup(name), name) {
+        (Some(p), _) => format!("{}", p.get(case)),
+        (None, "defect_race") => case
+            .bearing
+            .defects
+            .first()
+            .map_or("none", |d| d.race.name())
+            .to_string(),
+        (None, _) => case.location.to_string(),
+    }
+}
+
 /// The parameter called `name`.
 pub fn lookup(name: &str) -> Option<&'static ParamDef> {
     PARAMETERS.iter().find(|p| p.name == name)
