@@ -195,7 +195,7 @@ impl Zone {
 }
 
 /// One place where a defect meets balls. Ball `r` (0-based, base angle `α_r`) sits
-/// at the track angle `x = ratio ψ + per_ball α_r − centre` (wrapped to `[−π, π)`,
+/// at the track angle `x = ratio ψ + (per_ball α_r − centre)` (wrapped to `[−π, π)`,
 /// with `ψ` the ball's angle on the inner race `ψ_in` or the outer race `ψ_out`), at
 /// the arc position `s = radius x` (m) from the defect's centre.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,8 +203,9 @@ pub(crate) struct Track {
     /// Whether `ψ` is `ψ_in` (else `ψ_out`); the slope `∂δ/∂ψ` goes to that race.
     pub inner: bool,
     ratio: f64,
-    per_ball: f64,
-    centre: f64,
+    /// `per_ball α_r − centre` of each ball that meets it (rad): `per_ball` is 1 on
+    /// a race, 0 on a ball (whose track does not depend on the ball's place).
+    start: Vec<f64>,
     /// Arc length per radian of the surface (m): its radius.
     radius: f64,
     /// Number of balls that meet it: all, or 1 (ball 0) for a ball defect.
@@ -247,8 +248,9 @@ impl Track {
                 Track {
                     inner,
                     ratio,
-                    per_ball,
-                    centre,
+                    start: (0..balls)
+                        .map(|r| per_ball * TAU * r as f64 / balls as f64 - centre)
+                        .collect(),
                     radius,
                     balls,
                     half_width,
@@ -275,13 +277,18 @@ impl Track {
         }
     }
 
-    /// Arc position `s` (m) of ball `r` at base angle `alpha` (rad) from the
-    /// defect's centre, in `[−π radius, π radius)`.
+    /// Arc position `s` (m) of ball `r` (0-based, below [`Track::balls`]) from the
+    /// defect's centre, in `[−π radius, π radius)` (up to rounding at the ends).
     #[inline(always)]
-    pub fn position(&self, alpha: f64, s: &ContactState) -> f64 {
+    pub fn position(&self, r: usize, s: &ContactState) -> f64 {
         let psi = if self.inner { s.psi_in } else { s.psi_out };
-        let x = self.ratio * psi + self.per_ball * alpha - self.centre;
-        self.radius * (x - TAU * (x / TAU + 0.5).floor())
+        let x = self.ratio * psi + self.start[r];
+        // x − 2π floor(x/2π + 1/2), the floor by truncation (no libm call): the
+        // angles stay far inside the i64 range.
+        let q = x * (1.0 / TAU) + 0.5;
+        let t = q as i64 as f64;
+        let turns = if t > q { t - 1.0 } else { t };
+        self.radius * (x - TAU * turns)
     }
 
     /// `ds/dψ` (m/rad).

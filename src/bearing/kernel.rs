@@ -693,8 +693,7 @@ impl BallSet {
         if let Some(defects) = &self.defects {
             for (k, track) in defects.tracks.iter().enumerate() {
                 for r in 0..track.balls {
-                    let alpha = std::f64::consts::TAU * r as f64 / self.balls as f64;
-                    let pos = track.position(alpha, s);
+                    let pos = track.position(r, s);
                     let zone = rule.zone(k * self.balls + r, track.zone(pos));
                     self.offset[r / LANES].0[r % LANES] -= track.lowering(zone, pos).0;
                     if R::HELD {
@@ -816,7 +815,7 @@ impl BallSet {
                 if r >= track.balls {
                     continue;
                 }
-                let pos = track.position(alpha, s);
+                let pos = track.position(r, s);
                 let zone = match regime {
                     Some(held) => held.zone(k * self.balls + r),
                     None => track.zone(pos),
