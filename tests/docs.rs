@@ -11,8 +11,8 @@ use std::path::Path;
 
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
-    BearingSection, DefectSection, GeometrySection, GridFile, HarmonicSection, MechanismSection, OutputSection,
-    SolverSection, SpectraSection, WavinessSection,
+    BearingSection, DefectSection, GeometrySection, GridFile, HarmonicSection, MechanismSection,
+    OutputSection, SolverSection, SpectraSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -152,7 +152,10 @@ fn the_parameter_table_lists_every_parameter_with_its_unit_long_name_and_default
         let actual = p.get(&base);
         // A parameter of something the default case does not have (a defect) is NaN.
         if actual.is_nan() {
-            assert_eq!(default, "none", "{GRID_FILE_DOC}: default of `{name}` (NaN)");
+            assert_eq!(
+                default, "none",
+                "{GRID_FILE_DOC}: default of `{name}` (NaN)"
+            );
             continue;
         }
         let value = p
