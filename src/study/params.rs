@@ -70,9 +70,10 @@ fn both(c: &CaseParams, f: fn(&Harmonic) -> f64) -> f64 {
     }
 }
 
-/// A field of the case's first defect, NaN without one.
+/// A field of the case's first defect; without one, of [`Defect::default`] (zero
+/// depth: what a `defect_*` axis would create, and no defect either way).
 fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
-    c.bearing.defects.first().map_or(f64::NAN, f)
+    f(c.bearing.defects.first().unwrap_or(&Defect::default()))
 }
 
 macro_rules! param {
@@ -92,7 +93,7 @@ macro_rules! param {
 /// Every scalar parameter, in file order. `waviness_*` set both races' first
 /// harmonic; in files they hold the common value (NaN where the races differ).
 /// `defect_*` act on the first defect (created, of zero depth, if absent); in files
-/// they hold its values (NaN without defects).
+/// they hold its values (those of that zero-depth defect without defects).
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
