@@ -177,8 +177,9 @@ trait LoadRule: Copy {
     /// Whether the rule holds a regime, so that switches have a margin.
     const HELD: bool;
     /// The zone of the ball at `slot` on its defect track ([`Regime`]'s `zones`),
-    /// given the zone its position puts it in (`natural`).
-    fn zone(self, slot: usize, natural: Zone) -> Zone;
+    /// given how to find the zone its position puts it in (`natural`, not called
+    /// under a held regime).
+    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone;
 }
 
 /// One lane vector's contact quantities, for [`LoadRule::margin`].
@@ -222,8 +223,8 @@ impl LoadRule for Natural {
     const HELD: bool = false;
 
     #[inline(always)]
-    fn zone(self, _slot: usize, natural: Zone) -> Zone {
-        natural
+    fn zone(self, _slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
+        natural()
     }
 }
 
@@ -253,7 +254,7 @@ impl LoadRule for Held<'_> {
     const HELD: bool = true;
 
     #[inline(always)]
-    fn zone(self, slot: usize, _natural: Zone) -> Zone {
+    fn zone(self, slot: usize, _natural: impl FnOnce() -> Zone) -> Zone {
         Zone::of(self.zones[slot])
     }
 }
@@ -289,9 +290,10 @@ impl LoadRule for Recording<'_> {
     const HELD: bool = false;
 
     #[inline(always)]
-    fn zone(self, slot: usize, natural: Zone) -> Zone {
-        self.zones[slot].set(natural as u8);
-        natural
+    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
+        let zone = natural();
+        self.zones[slot].set(zone as u8);
+        zone
     }
 }
 
@@ -692,10 +694,11 @@ impl BallSet {
         let mut margin = f64::INFINITY;
         if let Some(defects) = &self.defects {
             for (k, track) in defects.tracks.iter().enumerate() {
-                for r in 0..track.balls {
+                let offsets = self.offset.iter_mut().flat_map(|v| v.0.iter_mut());
+                for (r, offset) in offsets.take(track.balls).enumerate() {
                     let pos = track.position(r, s);
-                    let zone = rule.zone(k * self.balls + r, track.zone(pos));
-                    self.offset[r / LANES].0[r % LANES] -= track.lowering(zone, pos).0;
+                    let zone = rule.zone(k * self.balls + r, || track.zone(pos));
+                    *offset -= track.lowering(zone, pos).0;
                     if R::HELD {
                         margin = margin.min(track.margin(zone, pos));
                     }
