@@ -9,10 +9,10 @@
 //! edge it rolls over, so the lowering `R_b − √(R_b² − d²)` at a distance `d` past
 //! the edge rises smoothly to `h_eff`.
 //!
-//! Each defect becomes one or two [`Track`]s, a place where it meets balls: a race
+//! Each defect becomes one or two `Track`s, a place where it meets balls: a race
 //! defect one (every ball rolls over it), a ball defect two (ball 0's defect meets
 //! the outer race, then the inner race). Along a track a ball is in one of three
-//! [`Zone`]s (outside, on the rounded ramp, on the floor); the zone is what an
+//! `Zone`s (outside, on the rounded ramp, on the floor); the zone is what an
 //! integrator holds fixed across a step, and its edges are switches located like
 //! contact onsets.
 
@@ -173,7 +173,7 @@ pub fn fault_label(defects: &[Defect]) -> String {
 /// Where a ball is along a [`Track`]; held fixed over an integrator step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u8)]
-pub enum Zone {
+pub(crate) enum Zone {
     /// Off the defect: no lowering.
     #[default]
     Outside = 0,
@@ -185,7 +185,7 @@ pub enum Zone {
 
 impl Zone {
     /// The zone of a stored byte (as [`Zone`]'s discriminant).
-    pub fn of(byte: u8) -> Zone {
+    pub(crate) fn of(byte: u8) -> Zone {
         match byte {
             1 => Zone::Ramp,
             2 => Zone::Floor,
