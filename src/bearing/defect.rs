@@ -220,7 +220,8 @@ pub(crate) struct Track {
     /// `h_eff` (m).
     floor: f64,
     /// Distance past the edge where a rounded ramp reaches the floor,
-    /// `√(h_eff (2 R_b − h_eff))` (m).
+    /// `√(h_eff (2 R_b − h_eff))` (m) when the depth limits the ball, `+∞` when the
+    /// width does (the ramp reaches the floor only at the centre).
     ramp_end: f64,
 }
 
@@ -242,7 +243,14 @@ impl Track {
         let geometric =
             reach * reach / (ball_radius + (ball_radius * ball_radius - reach * reach).sqrt());
         let floor = defect.depth.min(geometric);
-        let ramp_end = (floor * (2.0 * ball_radius - floor)).max(0.0).sqrt();
+        // Where the depth, not the width, limits the ball, a rounded ramp reaches
+        // the floor at d*; else only at the centre, where both edges hold the ball:
+        // the whole defect is ramp (its value at the centre is the floor).
+        let ramp_end = if defect.depth < geometric {
+            (floor * (2.0 * ball_radius - floor)).sqrt()
+        } else {
+            f64::INFINITY
+        };
         let track =
             |inner: bool, ratio: f64, per_ball: f64, centre: f64, radius: f64, balls: usize| {
                 Track {
@@ -423,6 +431,20 @@ mod tests {
         let numeric =
             (t.lowering(Zone::Ramp, x + dx).0 - t.lowering(Zone::Ramp, x - dx).0) / (2.0 * dx);
         assert!((numeric - t.lowering(Zone::Ramp, x).1).abs() < 1e-6 * numeric.abs());
+    }
+
+    #[test]
+    fn a_rounded_defect_narrower_than_its_depth_is_all_ramp() {
+        // 0.5 mm wide, 20 µm deep: the ball reaches 7.2 µm, at the centre only.
+        let t = track(DefectProfile::Rounded, 0.5e-3, 20e-6);
+        assert_eq!(t.zone(0.0), Zone::Ramp);
+        assert_eq!(t.margin(Zone::Ramp, 0.0), 0.25e-3);
+        let (centre, slope) = t.lowering(Zone::Ramp, 0.0);
+        assert!((centre - t.lowering(Zone::Floor, 0.0).0).abs() < 1e-20);
+        assert!(
+            slope.abs() < 0.1 && (7.17e-6..7.2e-6).contains(&centre),
+            "{centre} {slope}"
+        );
     }
 
     #[test]
