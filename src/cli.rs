@@ -13,7 +13,7 @@ use studyrun::output;
 use studyrun::run::{self, RunOptions};
 use studyrun::simulate::{simulate, Sampling, CHANNELS};
 use studyrun::study::memory::{self, Limits};
-use studyrun::study::params::lookup;
+use studyrun::study::params::axis_value;
 use studyrun::study::Shard;
 use studyrun::study::{Study, StudyError};
 
@@ -445,10 +445,7 @@ fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
         let c = &study.cases[r];
         let mut line = vec![c.id.to_string()];
         for axis in &varied {
-            line.push(match lookup(axis) {
-                Some(p) => format!("{}", p.get(&c.params)),
-                None => c.params.location.to_string(),
-            });
+            line.push(axis_value(axis, &c.params));
         }
         out!("{}", line.join("\t"))?;
     }
@@ -603,10 +600,7 @@ fn accuracy_command(
         let labels: Vec<String> = study
             .varied()
             .iter()
-            .map(|a| match lookup(a) {
-                Some(p) => format!("{a}={}", p.get(&c.params)),
-                None => format!("{a}={}", c.params.location),
-            })
+            .map(|a| format!("{a}={}", axis_value(a, &c.params)))
             .collect();
         out!(
             "\ncase {} ({}): horizon {:.3} s of {} s{}; reference metric uncertainty {:.1e} / {:.1e} / {:.1e}",

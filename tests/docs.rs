@@ -11,9 +11,9 @@ use std::path::Path;
 
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
-    BearingSection, DesignParameter, DesignSection, EnvelopeSection, GeometrySection, GridFile,
-    HarmonicSection, MechanismSection, OutputSection, SolverSection, SpectraSection, SpeedSection,
-    WavinessSection,
+    BearingSection, DefectSection, DesignParameter, DesignSection, EnvelopeSection,
+    GeometrySection, GridFile, HarmonicSection, MechanismSection, OutputSection, SolverSection,
+    SpectraSection, SpeedSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -241,6 +241,7 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<WavinessSection>("bearing.waviness."));
     expected.extend(keys_of::<HarmonicSection>("bearing.waviness.harmonics[]."));
     expected.extend(keys_of::<GeometrySection>("bearing.geometry."));
+    expected.extend(keys_of::<DefectSection>("bearing.defects[]."));
     expected.extend(keys_of::<SolverSection>("solver."));
     expected.extend(keys_of::<SpectraSection>("spectra."));
     expected.extend(keys_of::<EnvelopeSection>("envelope."));

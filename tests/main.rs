@@ -9,6 +9,7 @@ mod cli;
 mod constraints;
 mod convergence;
 mod damaged_files;
+mod defects;
 mod designs;
 mod docs;
 mod energy;

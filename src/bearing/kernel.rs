@@ -28,6 +28,12 @@
 //!   switching; a negative margin says the regime no longer matches the state. The
 //!   event-locating integrators use both.
 //!
+//! - Localized defects (docs/model.md §2.9), when a case has any, lower each ball's
+//!   offset by the depth it reaches over them before the ball loop; the zone of each
+//!   ball on each defect track is part of the [`Regime`], and its distance from the
+//!   zone's edges part of the margin. A case without defects builds none and runs
+//!   the loop it ran without them.
+//!
 //! [`BallSet::ball`] is the kernel's scalar twin: one ball at a time, with every
 //! waviness height from its own `sin`, as a reference for parity tests and for the
 //! energy terms.
@@ -37,6 +43,7 @@ use std::cell::Cell;
 use crate::numeric::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
 use crate::numeric::trig::{sin_cos4, AffineSinCos};
 
+use super::defect::{Defects, Zone};
 use super::{BearingParams, CageWeights, DampingModel, RaceWaviness};
 
 /// Width of the kernel's lane chunks (balls per chunk).
@@ -81,6 +88,9 @@ pub struct Regime {
     /// ([`DampingLaw::acting`]: `v_r > 0` for compression-only damping, a positive
     /// total force for two-sided damping).
     acting: Vec<F64x4>,
+    /// The [`Zone`] of ball `r` on defect track `k` at `k N_b + r` (empty without
+    /// defects).
+    zones: Vec<u8>,
 }
 
 impl Regime {
@@ -92,6 +102,11 @@ impl Regime {
     /// Whether ball `r`'s damping law is held on its acting branch.
     pub fn acting(&self, r: usize) -> bool {
         self.acting[r / LANES].0[r % LANES].to_bits() != 0
+    }
+
+    /// The held zone of the ball at `slot` (`k N_b + r`) on its defect track.
+    fn zone(&self, slot: usize) -> Zone {
+        Zone::of(self.zones[slot])
     }
 }
 
@@ -109,9 +124,10 @@ pub struct Ball {
     /// Its elastic part `K δ_r^{3/2}` (N), 0 when unloaded (under a held regime,
     /// `K δ_r |δ_r|^{1/2}` for a ball of its loaded set).
     pub elastic: f64,
-    /// `dΠ_i/dψ_in` under the ball (m/rad).
+    /// `∂δ_r/∂ψ_in` through the inner race's waviness and the defects on the inner
+    /// race or the ball (m/rad).
     pub slope_in: f64,
-    /// `dΠ_o/dψ_out` under the ball (m/rad).
+    /// `∂δ_r/∂ψ_out` through the outer race's waviness and defects (m/rad).
     pub slope_out: f64,
 }
 
@@ -158,6 +174,12 @@ trait LoadRule: Copy {
     /// [`DampingLaw::switch_distance`] on loaded lanes (`+` where acting). The
     /// natural law cannot switch and leaves it alone.
     fn margin<V: Lanes>(self, margin: V, lane: LaneState<V>, law_switches: bool) -> V;
+    /// Whether the rule holds a regime, so that switches have a margin.
+    const HELD: bool;
+    /// The zone of the ball at `slot` on its defect track ([`Regime`]'s `zones`),
+    /// given how to find the zone its position puts it in (`natural`, not called
+    /// under a held regime).
+    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone;
 }
 
 /// One lane vector's contact quantities, for [`LoadRule::margin`].
@@ -179,6 +201,7 @@ struct Natural;
 struct Held<'a> {
     loaded: &'a [F64x4],
     acting: &'a [F64x4],
+    zones: &'a [u8],
 }
 
 impl LoadRule for Natural {
@@ -195,6 +218,13 @@ impl LoadRule for Natural {
     #[inline(always)]
     fn margin<V: Lanes>(self, margin: V, _lane: LaneState<V>, _law_switches: bool) -> V {
         margin
+    }
+
+    const HELD: bool = false;
+
+    #[inline(always)]
+    fn zone(self, _slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
+        natural()
     }
 }
 
@@ -220,6 +250,13 @@ impl LoadRule for Held<'_> {
         let d = l.acting.bitselect(l.distance, -l.distance);
         m.fast_min(l.loaded.bitselect(d, V::splat(f64::INFINITY)))
     }
+
+    const HELD: bool = true;
+
+    #[inline(always)]
+    fn zone(self, slot: usize, _natural: impl FnOnce() -> Zone) -> Zone {
+        Zone::of(self.zones[slot])
+    }
 }
 
 /// Loaded and acting by the natural law, recording both masks of each lane vector
@@ -228,6 +265,7 @@ impl LoadRule for Held<'_> {
 struct Recording<'a> {
     loaded: &'a [Cell<F64x4>],
     acting: &'a [Cell<F64x4>],
+    zones: &'a [Cell<u8>],
 }
 
 impl LoadRule for Recording<'_> {
@@ -247,6 +285,15 @@ impl LoadRule for Recording<'_> {
     #[inline(always)]
     fn margin<V: Lanes>(self, margin: V, lane: LaneState<V>, law_switches: bool) -> V {
         Natural.margin(margin, lane, law_switches)
+    }
+
+    const HELD: bool = false;
+
+    #[inline(always)]
+    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
+        let zone = natural();
+        self.zones[slot].set(zone as u8);
+        zone
     }
 }
 
@@ -388,6 +435,8 @@ pub struct BallSet {
     /// Set by [`BallSet::turn_with`]: the races turn in proportion to the caller's
     /// angle, and the angles' sines and cosines come from it.
     turning: Option<Turning>,
+    /// The defect tracks, if the case has defects of nonzero depth.
+    defects: Option<Defects>,
 }
 
 /// Races that turn in proportion to one angle `θ` (rad): the journal by
@@ -461,6 +510,7 @@ impl BallSet {
             cosines: vec![0.0; (2 + waves.len()).next_multiple_of(LANES)],
             waves,
             turning: None,
+            defects: Defects::of(params),
         }
     }
 
@@ -561,6 +611,7 @@ impl BallSet {
                 let held = Held {
                     loaded: &r.loaded[..n],
                     acting: &r.acting[..n],
+                    zones: &r.zones,
                 };
                 self.sum::<V, _>(s, held)
             }
@@ -571,9 +622,11 @@ impl BallSet {
 
     /// An empty regime (no ball loaded) sized for this set.
     pub fn no_regime(&self) -> Regime {
+        let tracks = self.defects.as_ref().map_or(0, |d| d.tracks.len());
         Regime {
             loaded: vec![F64x4::ZERO; self.dir_cos.len()],
             acting: vec![F64x4::ZERO; self.dir_cos.len()],
+            zones: vec![0; tracks * self.balls],
         }
     }
 
@@ -589,6 +642,7 @@ impl BallSet {
         let rule = Recording {
             loaded: Cell::from_mut(&mut regime.loaded[..]).as_slice_of_cells(),
             acting: Cell::from_mut(&mut regime.acting[..]).as_slice_of_cells(),
+            zones: Cell::from_mut(&mut regime.zones[..]).as_slice_of_cells(),
         };
         self.sum::<F64x4, _>(s, rule);
     }
@@ -597,8 +651,12 @@ impl BallSet {
     /// With the common two waviness harmonics (one per race) the balls' offsets are
     /// computed inside the ball loop; with other counts [`fill_offsets`] stores them
     /// first. Either way each offset is `(base + wave₁) + wave₂ …` in the same order.
+    /// With defects, [`BallSet::sum_defective`] takes over.
     #[inline(always)]
     fn sum<V: Lanes, R: LoadRule>(&mut self, s: &ContactState, rule: R) -> BallSum {
+        if self.defects.is_some() {
+            return self.sum_defective::<V, R>(s, rule);
+        }
         let n = self.dir_cos.len();
         let base = &self.base[..n];
         match self.waves.as_slice() {
@@ -618,6 +676,38 @@ impl BallSet {
                 self.sum_with::<V, R, _>(s, rule, Stored(&self.offset[..n]))
             }
         }
+    }
+
+    /// [`BallSet::sum`] of a case with defects: [`fill_offsets`] stores the offsets
+    /// with waviness, each ball's lowering over each defect track is taken off its
+    /// offset (in the zone `rule` says), and under a held regime the margin is
+    /// lowered by the balls' distances (m along the track) from their zones' edges.
+    #[inline(always)]
+    fn sum_defective<V: Lanes, R: LoadRule>(&mut self, s: &ContactState, rule: R) -> BallSum {
+        let n = self.dir_cos.len();
+        fill_offsets::<V>(
+            &mut self.offset,
+            &self.base,
+            &self.waves,
+            (&self.sines[1..], &self.cosines[1..]),
+        );
+        let mut margin = f64::INFINITY;
+        if let Some(defects) = &self.defects {
+            for (k, track) in defects.tracks.iter().enumerate() {
+                let offsets = self.offset.iter_mut().flat_map(|v| v.0.iter_mut());
+                for (r, offset) in offsets.take(track.balls).enumerate() {
+                    let pos = track.position(r, s);
+                    let zone = rule.zone(k * self.balls + r, || track.zone(pos));
+                    *offset -= track.lowering(zone, pos).0;
+                    if R::HELD {
+                        margin = margin.min(track.margin(zone, pos));
+                    }
+                }
+            }
+        }
+        let mut sum = self.sum_with::<V, R, _>(s, rule, Stored(&self.offset[..n]));
+        sum.margin = sum.margin.min(margin);
+        sum
     }
 
     /// [`BallSet::sum`] with the balls' offsets from `offsets`.
@@ -721,6 +811,26 @@ impl BallSet {
             match w.race {
                 Race::Inner => slope_in += slope,
                 Race::Outer => slope_out += slope,
+            }
+        }
+        if let Some(defects) = &self.defects {
+            for (k, track) in defects.tracks.iter().enumerate() {
+                if r >= track.balls {
+                    continue;
+                }
+                let pos = track.position(r, s);
+                let zone = match regime {
+                    Some(held) => held.zone(k * self.balls + r),
+                    None => track.zone(pos),
+                };
+                let (lowering, rate) = track.lowering(zone, pos);
+                delta -= lowering;
+                let slope = -rate * track.arc_rate();
+                if track.inner {
+                    slope_in += slope;
+                } else {
+                    slope_out += slope;
+                }
             }
         }
         let approach = s.v[0] * normal[0] + s.v[1] * normal[1];

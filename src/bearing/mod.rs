@@ -7,10 +7,12 @@
 //! its force `F_r = K δ_r^{3/2} + C max(v_r, 0)` (or the two-sided variant). The
 //! housing receives `F = Σ F_r n_r` at its race centre, the journal `−F` at its.
 
+pub mod defect;
 pub mod kernel;
 pub mod stiffness;
 mod waviness;
 
+pub use defect::{fault_label, Defect, DefectProfile, DefectRace};
 pub use kernel::{BallSet, BallSum, ContactState, Regime};
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
@@ -49,11 +51,16 @@ pub struct BearingParams {
     pub inner_waviness: RaceWaviness,
     /// Waviness of the outer raceway (in the housing).
     pub outer_waviness: RaceWaviness,
+    /// Localized defects (docs/model.md §2.9); empty without the `defects` effect.
+    pub defects: Vec<Defect>,
+    /// Ball diameter `D` (m): the radius `R_b = D/2` of the balls rolling over a
+    /// defect (docs/model.md §2.9).
+    pub ball_diameter: f64,
 }
 
 impl Default for BearingParams {
     /// The paper's bearing: 9 balls, `P_d` = 40 µm, `K` = 9.57e9 N/m^1.5,
-    /// `C` = 300 N s/m, no waviness.
+    /// `C` = 300 N s/m, no waviness, no defects, `D` = 8.70 mm.
     fn default() -> Self {
         Self {
             ball_count: 9,
@@ -65,6 +72,8 @@ impl Default for BearingParams {
             damping_model: DampingModel::CompressionOnly,
             inner_waviness: RaceWaviness::default(),
             outer_waviness: RaceWaviness::default(),
+            defects: Vec::new(),
+            ball_diameter: 8.70e-3,
         }
     }
 }
@@ -113,6 +122,10 @@ impl BearingParams {
         non_negative("bearing.damping", self.damping)?;
         self.inner_waviness.validate("bearing.inner_waviness")?;
         self.outer_waviness.validate("bearing.outer_waviness")?;
+        positive("bearing.geometry.ball_diameter", self.ball_diameter)?;
+        for (k, d) in self.defects.iter().enumerate() {
+            d.validate(&format!("bearing.defects[{k}]"))?;
+        }
         Ok(())
     }
 }

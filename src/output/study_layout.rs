@@ -1,5 +1,6 @@
 //! The study file's [`Layout`] for a study (or a shard of it).
 
+use crate::bearing::fault_label;
 use crate::mechanism::CaseParams;
 use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
@@ -93,6 +94,43 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     parameters.push(Param {
         spec: VarSpec::new("speed_profile", "1", PROFILE_DESCRIPTION),
         values: ParamValues::Str(cases.iter().map(|c| profile_name(&c.params)).collect()),
+    });
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "defect_race",
+            "1",
+            "race of the first defect: outer, inner or ball (none without defects)",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| {
+                    c.params
+                        .bearing
+                        .defects
+                        .first()
+                        .map_or("none", |d| d.race.name())
+                        .to_string()
+                })
+                .collect(),
+        ),
+    });
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "fault",
+            "1",
+            "fault label: the races with a defect of nonzero depth (outer, inner, ball, \
+             joined by +), or none",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| match c.params.location {
+                    crate::mechanism::Location::Ideal => "none".to_string(),
+                    _ => fault_label(&c.params.bearing.defects),
+                })
+                .collect(),
+        ),
     });
     let reference_parameters = vec![
         Param {

@@ -42,7 +42,7 @@ pub struct GridFile {
     pub duration: S<Scalar>,
     /// Output samples per second (Hz).
     pub sample_rate: S<Scalar>,
-    /// Effects simulated: any of clearance, waviness, damping, gravity.
+    /// Effects simulated: any of clearance, waviness, damping, gravity, defects.
     #[serde(default)]
     pub effects: Option<S<Vec<S<String>>>>,
     /// Body parameter overrides.
@@ -187,8 +187,29 @@ pub struct BearingSection {
     pub waviness: Option<WavinessSection>,
     pub inner_waviness: Option<WavinessSection>,
     pub outer_waviness: Option<WavinessSection>,
-    /// Contact geometry for `stiffness: harris`.
+    /// Contact geometry for `stiffness: harris`; its `ball_diameter` also sizes the
+    /// balls rolling over defects.
     pub geometry: Option<GeometrySection>,
+    /// Localized defects (with the `defects` effect).
+    pub defects: Option<S<Vec<DefectSection>>>,
+}
+
+/// One defect in a `defects:` list.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DefectSection {
+    /// `outer`, `inner` or `ball`.
+    pub race: S<String>,
+    /// Angle of its centre (rad, or `"90 deg"`); default 0.
+    #[serde(default)]
+    pub angle: Option<S<Scalar>>,
+    /// Width along the surface (m).
+    pub width: S<Scalar>,
+    /// Depth (m).
+    pub depth: S<Scalar>,
+    /// `flat` (default) or `rounded`.
+    #[serde(default)]
+    pub profile: Option<S<String>>,
 }
 
 /// One race's waviness: a single harmonic (`number`, `amplitude`, `phase`) or a list.

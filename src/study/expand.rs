@@ -6,8 +6,8 @@ use std::path::Path;
 use serde_saphyr::Location;
 
 use super::config::{
-    BandValue, CaseValue, EnvelopeSection, GridFile, OutputSection, Scalar, SpectraSection,
-    SpeedSection, WavinessSection, S,
+    BandValue, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection, Scalar,
+    SpectraSection, SpeedSection, WavinessSection, S,
 };
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -16,7 +16,7 @@ use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
 use crate::bearing::stiffness::ContactGeometry;
-use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
+use crate::bearing::{DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
@@ -34,14 +34,22 @@ pub struct Effects {
     pub damping: bool,
     /// Gravity along −y.
     pub gravity: bool,
+    /// Localized defects (off: no defects, no defect code in the kernel).
+    pub defects: bool,
 }
 
 impl Effects {
-    const NAMES: [&'static str; 4] = ["clearance", "waviness", "damping", "gravity"];
+    const NAMES: [&'static str; 5] = ["clearance", "waviness", "damping", "gravity", "defects"];
 
     /// The names of the effects that are on.
     pub fn names(&self) -> Vec<&'static str> {
-        let on = [self.clearance, self.waviness, self.damping, self.gravity];
+        let on = [
+            self.clearance,
+            self.waviness,
+            self.damping,
+            self.gravity,
+            self.defects,
+        ];
         Self::NAMES
             .iter()
             .zip(on)
@@ -58,6 +66,8 @@ impl Effects {
             Some(("damping", self.damping))
         } else if param == "clearance" {
             Some(("clearance", self.clearance))
+        } else if param.starts_with("defect") {
+            Some(("defects", self.defects))
         } else {
             None
         }
@@ -161,13 +171,29 @@ impl Ctx<'_> {
                 .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.allowed))?;
             return Ok(Target::Location(site));
         }
+        if name == "defect_race" {
+            let race = match &v.value {
+                Scalar::Text(t) => t.parse::<DefectRace>().ok(),
+                Scalar::Num(_) => None,
+            };
+            return race.map(Target::DefectRace).ok_or_else(|| {
+                self.err(
+                    Some(place),
+                    field,
+                    format!(
+                        "{} is not a defect race; expected one of outer, inner, ball",
+                        v.value
+                    ),
+                )
+            });
+        }
         let param = lookup(name).ok_or_else(|| {
             let names: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
             self.err(
                 Some(place),
                 field,
                 format!(
-                    "unknown parameter; expected location or one of: {}",
+                    "unknown parameter; expected location, defect_race or one of: {}",
                     names.join(", ")
                 ),
             )
@@ -333,6 +359,8 @@ enum Target {
     Param(&'static ParamDef, f64),
     /// The bearing location.
     Location(Site),
+    /// The race of the first defect.
+    DefectRace(DefectRace),
 }
 
 impl Target {
@@ -340,6 +368,7 @@ impl Target {
         match *self {
             Target::Param(p, x) => p.set(case, x),
             Target::Location(site) => case.location = site,
+            Target::DefectRace(race) => Defect::first(&mut case.bearing.defects).race = race,
         }
     }
 
@@ -348,6 +377,7 @@ impl Target {
         match self {
             Target::Param(p, _) => p.name,
             Target::Location(_) => "location",
+            Target::DefectRace(_) => "defect_race",
         }
     }
 
@@ -356,6 +386,7 @@ impl Target {
         match (self, other) {
             (Target::Param(_, a), Target::Param(_, b)) => a == b,
             (Target::Location(a), Target::Location(b)) => a == b,
+            (Target::DefectRace(a), Target::DefectRace(b)) => a == b,
             _ => false,
         }
     }
@@ -1084,6 +1115,7 @@ fn check_repeats(ctx: &Ctx<'_>, groups: &[Vec<ResolvedAxis<'_>>]) -> Result<(), 
     let key = |t: &Target| match *t {
         Target::Param(_, x) => (x + 0.0).to_bits(),
         Target::Location(site) => site as u64,
+        Target::DefectRace(race) => race as u64,
     };
     for group in groups {
         let rows = group[0].values.len();
@@ -1219,6 +1251,9 @@ fn finish_case(
     if !effects.damping {
         params.bearing.damping = 0.0;
     }
+    if !effects.defects {
+        params.bearing.defects.clear();
+    }
     params.gravity = effects.gravity;
     let checked = params.validate().and_then(|()| balls_fit(&params));
     checked.map_err(|e| {
@@ -1278,6 +1313,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             waviness: true,
             damping: true,
             gravity: false,
+            defects: false,
         });
     };
     let mut e = Effects {
@@ -1285,6 +1321,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
         waviness: false,
         damping: false,
         gravity: false,
+        defects: false,
     };
     for (k, name) in list.value.iter().enumerate() {
         let slot = match name.value.as_str() {
@@ -1292,6 +1329,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             "waviness" => &mut e.waviness,
             "damping" => &mut e.damping,
             "gravity" => &mut e.gravity,
+            "defects" => &mut e.defects,
             other => {
                 return Err(ctx.err(
                     Some(at(&name.referenced)),
@@ -1385,6 +1423,13 @@ fn base_case(
             if let Some(w) = section {
                 waviness(ctx, &mut c, race, w, effects, prov)?;
             }
+        }
+        if let Some(d) = b.geometry.as_ref().and_then(|g| g.ball_diameter.as_ref()) {
+            c.bearing.ball_diameter =
+                ctx.quantity(d, Dimension::Length, "bearing.geometry.ball_diameter")?;
+        }
+        if let Some(list) = &b.defects {
+            c.bearing.defects = defects(ctx, list, effects)?;
         }
     }
     match (&file.speed, &file.rpm) {
@@ -1508,6 +1553,77 @@ fn waviness(
         }
     }
     Ok(())
+}
+
+/// The `bearing.defects:` list, each checked with its field named.
+fn defects(
+    ctx: &Ctx<'_>,
+    list: &S<Vec<DefectSection>>,
+    effects: &Effects,
+) -> Result<Vec<Defect>, StudyError> {
+    if !effects.defects {
+        return Err(ctx.err(
+            Some(at(&list.referenced)),
+            "bearing.defects",
+            format!(
+                "the defects effect is off (effects: [{}]); add `defects` to `effects` to set it",
+                effects.names().join(", ")
+            ),
+        ));
+    }
+    list.value
+        .iter()
+        .enumerate()
+        .map(|(k, d)| {
+            let field = format!("bearing.defects[{k}]");
+            let race = d.race.value.parse::<DefectRace>().map_err(|_| {
+                ctx.err(
+                    Some(at(&d.race.referenced)),
+                    &format!("{field}.race"),
+                    format!("`{}` is not allowed: outer, inner or ball", d.race.value),
+                )
+            })?;
+            let profile = match d.profile.as_ref().map(|p| (p.value.as_str(), p)) {
+                None | Some(("flat", _)) => DefectProfile::Flat,
+                Some(("rounded", _)) => DefectProfile::Rounded,
+                Some((other, p)) => {
+                    return Err(ctx.err(
+                        Some(at(&p.referenced)),
+                        &format!("{field}.profile"),
+                        format!("`{other}` is not allowed: flat or rounded"),
+                    ))
+                }
+            };
+            let angle = d
+                .angle
+                .as_ref()
+                .map(|a| ctx.quantity(a, Dimension::Angle, &format!("{field}.angle")))
+                .transpose()?
+                .unwrap_or(0.0);
+            let width = ctx.quantity(&d.width, Dimension::Length, &format!("{field}.width"))?;
+            let depth = ctx.quantity(&d.depth, Dimension::Length, &format!("{field}.depth"))?;
+            let defect = Defect {
+                race,
+                angle,
+                width,
+                depth,
+                profile,
+            };
+            defect.validate(&field).map_err(|e| {
+                let place = if e.field.ends_with("width") {
+                    &d.width.referenced
+                } else {
+                    &d.depth.referenced
+                };
+                ctx.err(
+                    Some(at(place)),
+                    &e.field,
+                    format!("{} is not allowed: {}", e.value, e.allowed),
+                )
+            })?;
+            Ok(defect)
+        })
+        .collect()
 }
 
 /// `stiffness: harris`: Harris's method on the (default SKF 98205) contact geometry.

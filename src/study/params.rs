@@ -3,7 +3,7 @@
 //! [`CaseParams`].
 
 use super::units::Dimension;
-use crate::bearing::{Harmonic, RaceWaviness};
+use crate::bearing::{Defect, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, SpeedProfile};
 
 /// One scalar case parameter.
@@ -112,6 +112,12 @@ fn sine_mut(c: &mut CaseParams) -> Option<(&mut f64, &mut f64, &mut f64)> {
     }
 }
 
+/// A field of the case's first defect; without one, of [`Defect::default`] (zero
+/// depth: what a `defect_*` axis would create, and no defect either way).
+fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
+    f(c.bearing.defects.first().unwrap_or(&Defect::default()))
+}
+
 macro_rules! param {
     ($name:literal, $field:literal, $dim:ident, $int:literal, $long:literal, |$c:ident| $get:expr, |$s:ident, $v:ident| $set:expr) => {
         ParamDef {
@@ -130,6 +136,8 @@ macro_rules! param {
 /// harmonic; in files they hold the common value (NaN where the races differ).
 /// `rpm` is NaN for a case with a `speed:` profile, and the `speed_*` of a profile
 /// are NaN for any other speed.
+/// `defect_*` act on the first defect (created, of zero depth, if absent); in files
+/// they hold its values (those of that zero-depth defect without defects).
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
@@ -351,6 +359,33 @@ pub const PARAMETERS: &[ParamDef] = &[
         |c, v| c.bearing.outer_waviness.offset = v
     ),
     param!(
+        "defect_angle",
+        "bearing.defects[0].angle",
+        Angle,
+        false,
+        "angle of the first defect in the frame of its race's body (ball: on ball 0)",
+        |c| first_defect_value(c, |d| d.angle),
+        |c, v| Defect::first(&mut c.bearing.defects).angle = v
+    ),
+    param!(
+        "defect_width",
+        "bearing.defects[0].width",
+        Length,
+        false,
+        "width of the first defect along its surface",
+        |c| first_defect_value(c, |d| d.width),
+        |c, v| Defect::first(&mut c.bearing.defects).width = v
+    ),
+    param!(
+        "defect_depth",
+        "bearing.defects[0].depth",
+        Length,
+        false,
+        "depth of the first defect",
+        |c| first_defect_value(c, |d| d.depth),
+        |c, v| Defect::first(&mut c.bearing.defects).depth = v
+    ),
+    param!(
         "inner_race_diameter",
         "bearing.inner_race_diameter",
         Length,
@@ -441,6 +476,22 @@ pub const PARAMETERS: &[ParamDef] = &[
         |c, v| c.mechanism.slider_inertia = v
     ),
 ];
+
+/// The value of grid axis `name` in `case`, as text: a scalar parameter's value in
+/// its base unit, or the name of the location or of the first defect's race
+/// (`none` without defects).
+pub fn axis_value(name: &str, case: &CaseParams) -> String {
+    match (lookup(name), name) {
+        (Some(p), _) => format!("{}", p.get(case)),
+        (None, "defect_race") => case
+            .bearing
+            .defects
+            .first()
+            .map_or("none", |d| d.race.name())
+            .to_string(),
+        (None, _) => case.location.to_string(),
+    }
+}
 
 /// The parameter called `name`.
 pub fn lookup(name: &str) -> Option<&'static ParamDef> {

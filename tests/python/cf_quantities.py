@@ -34,6 +34,7 @@ QUANTITIES = {
 _BY_QUANTITY = {
     "dimensionless": [
         "case", "reference", "reference_index", "status", "error_message", "location",
+        "defect_race", "fault",
         "ball_count", "waviness_number", "inner_waviness_number", "outer_waviness_number",
         "min_loaded_balls", "max_loaded_balls", "steps", "rejected_steps", "rhs_evals",
         "contact_events", "loaded_balls", "speed_profile",
@@ -42,8 +43,9 @@ _BY_QUANTITY = {
         "clearance", "waviness_amplitude", "inner_waviness_amplitude", "outer_waviness_amplitude",
         "inner_waviness_offset", "outer_waviness_offset", "inner_race_diameter",
         "outer_race_diameter", "crank_length", "rod_length", "eccentricity_x", "eccentricity_y",
+        "defect_width", "defect_depth",
     ],
-    "angle": ["waviness_phase", "inner_waviness_phase", "outer_waviness_phase"],
+    "angle": ["waviness_phase", "inner_waviness_phase", "outer_waviness_phase", "defect_angle"],
     "crank_speed": ["rpm", "speed_from", "speed_to", "speed_mean", "speed_amplitude"],
     "stiffness": ["stiffness"],
     "damping": ["damping"],

@@ -237,10 +237,10 @@ fn column(
         |v: &S<Scalar>, sub: &str| ctx.resolve(base, name, v, &format!("{field}.{sub}"), effects);
     let scalar = |v: &S<Scalar>, sub: &str| match resolve(v, sub)? {
         Target::Param(p, x) => Ok((p, x)),
-        Target::Location(_) => Err(ctx.err(
+        Target::Location(_) | Target::DefectRace(_) => Err(ctx.err(
             Some(at(&v.referenced)),
             &format!("{field}.{sub}"),
-            "location is a name: give it as `choices: [crank_ground, crank_rod]`",
+            format!("{name} is a name: give its values as `choices: [...]`"),
         )),
     };
     match spec {
