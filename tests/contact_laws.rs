@@ -110,7 +110,10 @@ impl OdeSystem for Impact {
 /// Contact duration scale `(m²/(K² v0))^{1/5}` (s) and maximum penetration
 /// `(5 m v0²/(4 K))^{2/5}` (m) of the undamped impact.
 fn scales(m: f64, k: f64, v0: f64) -> (f64, f64) {
-    ((m * m / (k * k * v0)).powf(0.2), (1.25 * m * v0 * v0 / k).powf(0.4))
+    (
+        (m * m / (k * k * v0)).powf(0.2),
+        (1.25 * m * v0 * v0 / k).powf(0.4),
+    )
 }
 
 /// What one impact through the kernel gives.
@@ -139,11 +142,18 @@ fn impact(model: DampingModel, m: f64, k: f64, v0: f64) -> Outcome {
     });
     let mut xs = Vec::with_capacity(times.len());
     let mut last = [0.0; 3];
-    let stats = integrate(&mut sys, &settings, 0.0, &[x0, v0, 0.0], &times, |_, _, y| {
-        xs.push(y[0]);
-        last.copy_from_slice(y);
-        Ok(())
-    })
+    let stats = integrate(
+        &mut sys,
+        &settings,
+        0.0,
+        &[x0, v0, 0.0],
+        &times,
+        |_, _, y| {
+            xs.push(y[0]);
+            last.copy_from_slice(y);
+            Ok(())
+        },
+    )
     .unwrap();
     let i = (1..xs.len() - 1)
         .max_by(|&a, &b| xs[a].total_cmp(&xs[b]))
@@ -225,7 +235,12 @@ fn restitution_laws_match_an_independent_integration_at_every_scale() {
         let model = restitution_law(law, e);
         let chi = law.chi(e);
         let mut seen = Vec::new();
-        for (m, k, v0) in [(1.0, 1e9, 0.1), (6.0, 1e9, 0.1), (1.0, 2e10, 0.1), (1.0, 1e9, 0.9)] {
+        for (m, k, v0) in [
+            (1.0, 1e9, 0.1),
+            (6.0, 1e9, 0.1),
+            (1.0, 2e10, 0.1),
+            (1.0, 1e9, 0.9),
+        ] {
             let out = impact(model, m, k, v0);
             let reference = reference_restitution(chi / v0, m, k, v0);
             let energy = 0.5 * m * v0 * v0;
@@ -244,7 +259,11 @@ fn restitution_laws_match_an_independent_integration_at_every_scale() {
             seen.push(out.restitution);
         }
         let spread = seen.iter().fold(0.0f64, |a, &x| a.max((x - seen[0]).abs()));
-        assert!(spread < 2e-7, "{}: restitution varies by {spread:e}", law.name());
+        assert!(
+            spread < 2e-7,
+            "{}: restitution varies by {spread:e}",
+            law.name()
+        );
     }
 }
 
@@ -288,7 +307,10 @@ fn fixed_alpha_depends_on_impact_speed_alone() {
     let reference = reference_restitution(alpha, 1.0, 1e9, 0.4);
     println!("alpha {alpha} s/m: e_eff {base:.6} at 0.1 m/s, {fast:.6} at 0.4 m/s");
     assert!((fast - reference).abs() < 2e-7);
-    assert!(fast < base - 0.05, "restitution should fall with impact speed");
+    assert!(
+        fast < base - 0.05,
+        "restitution should fall with impact speed"
+    );
 }
 
 /// An onset slower than the floor latches the floor: the impact at `v0` = 1e-4 m/s
@@ -382,17 +404,53 @@ fn ledger_balance(case: &CaseParams) -> (f64, f64) {
 #[test]
 fn bad_damping_law_keys_are_refused_naming_the_field() {
     let cases = [
-        (grid("hunt_crossley", "  restitution: 1.5\n"), "bearing.restitution", "(0, 1]"),
-        (grid("flores", "  restitution: 0\n"), "bearing.restitution", "(0, 1]"),
+        (
+            grid("hunt_crossley", "  restitution: 1.5\n"),
+            "bearing.restitution",
+            "(0, 1]",
+        ),
+        (
+            grid("flores", "  restitution: 0\n"),
+            "bearing.restitution",
+            "(0, 1]",
+        ),
         (grid("gonthier", ""), "bearing.restitution", "needs"),
-        (grid("hunt_crossley_alpha", "  alpha: -1\n"), "bearing.alpha", ">= 0"),
+        (
+            grid("hunt_crossley_alpha", "  alpha: -1\n"),
+            "bearing.alpha",
+            ">= 0",
+        ),
         (grid("hunt_crossley_alpha", ""), "bearing.alpha", "needs"),
-        (grid("compression_only", "  restitution: 0.8\n"), "bearing.restitution", "does not use"),
-        (grid("flores", "  restitution: 0.8\n  alpha: 1\n"), "bearing.alpha", "does not use"),
-        (grid("hunt_crossley_alpha", "  alpha: 1\n  restitution: 0.8\n"), "bearing.restitution", "does not use"),
-        (grid("hunt_crossley", "  restitution: 0.8\n  damping: 300\n"), "bearing.damping", "does not use"),
-        (grid("hunt_crossley_alpha", "  alpha: \"2 N s/m\"\n"), "bearing.alpha", "s/m"),
-        (grid("hunt_crosley", ""), "bearing.damping_model", "gonthier"),
+        (
+            grid("compression_only", "  restitution: 0.8\n"),
+            "bearing.restitution",
+            "does not use",
+        ),
+        (
+            grid("flores", "  restitution: 0.8\n  alpha: 1\n"),
+            "bearing.alpha",
+            "does not use",
+        ),
+        (
+            grid("hunt_crossley_alpha", "  alpha: 1\n  restitution: 0.8\n"),
+            "bearing.restitution",
+            "does not use",
+        ),
+        (
+            grid("hunt_crossley", "  restitution: 0.8\n  damping: 300\n"),
+            "bearing.damping",
+            "does not use",
+        ),
+        (
+            grid("hunt_crossley_alpha", "  alpha: \"2 N s/m\"\n"),
+            "bearing.alpha",
+            "s/m",
+        ),
+        (
+            grid("hunt_crosley", ""),
+            "bearing.damping_model",
+            "gonthier",
+        ),
         (
             grid("flores", "  restitution: 0.8\n").replace("grid:", "effects: [clearance]\ngrid:"),
             "bearing.restitution",
@@ -406,4 +464,95 @@ fn bad_damping_law_keys_are_refused_naming_the_field() {
         assert!(err.location.is_some(), "{err}");
         assert!(err.message.contains(says), "{err}");
     }
+}
+
+/// [`SliderCrank`] without its `accept_step`, the one hook the latching laws added
+/// to the integration: everything else is forwarded.
+struct WithoutAccept(SliderCrank);
+
+impl OdeSystem for WithoutAccept {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
+        self.0.rhs(t, y, dydt)
+    }
+    fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
+        self.0.hold_regime(t, y)
+    }
+    fn release_regime(&mut self) {
+        self.0.release_regime()
+    }
+    fn margin(&self) -> f64 {
+        self.0.margin()
+    }
+}
+
+/// A paper case (crank_rod, 600 rpm, 9 balls, waviness on, 50 ms) with the laws
+/// that do not latch gives the same bits with the step-end latch and without it,
+/// on the event-locating DOP853 and on RK4: their integration is the one before
+/// the latching laws existed. A latching law differs (the check can fail).
+#[test]
+fn laws_without_latching_run_the_same_bits_with_and_without_the_step_end_hook() {
+    let mut case = CaseParams {
+        location: studyrun::Location::CrankRod,
+        rpm: 600.0,
+        ..CaseParams::default()
+    };
+    case.bearing.inner_waviness = studyrun::bearing::RaceWaviness::single(35, 4e-6);
+    case.bearing.outer_waviness = studyrun::bearing::RaceWaviness::single(35, 4e-6);
+    let times: Vec<f64> = (0..=1000).map(|k| 0.05 * k as f64 / 1000.0).collect();
+    let run = |case: &CaseParams, method: Method, hook: bool| {
+        let model = SliderCrank::new(case).unwrap();
+        let y0 = model.initial_state();
+        let mut out = Vec::new();
+        let settings = SolverSettings::new(method);
+        let stats = if hook {
+            let mut sys = model;
+            integrate(&mut sys, &settings, 0.0, &y0, &times, |m, t, y| {
+                out.push((y.to_vec(), m.sample(t, y)?.slider_acceleration));
+                Ok(())
+            })
+        } else {
+            let mut sys = WithoutAccept(model);
+            integrate(&mut sys, &settings, 0.0, &y0, &times, |m, t, y| {
+                out.push((y.to_vec(), m.0.sample(t, y)?.slider_acceleration));
+                Ok(())
+            })
+        }
+        .unwrap();
+        (out, stats)
+    };
+    let bits = |out: &[(Vec<f64>, f64)]| -> Vec<u64> {
+        out.iter()
+            .flat_map(|(y, a)| y.iter().chain(std::iter::once(a)).map(|x| x.to_bits()))
+            .collect()
+    };
+    let methods = [Method::DEFAULT, Method::Rk4 { step: 20e-6 }];
+    for (name, damping, model) in [
+        ("compression_only", 300.0, DampingModel::CompressionOnly),
+        ("two_sided", 300.0, DampingModel::TwoSided),
+        ("undamped", 0.0, DampingModel::CompressionOnly),
+        (
+            "hunt_crossley_alpha",
+            0.0,
+            DampingModel::HuntCrossleyAlpha { alpha: 0.5 },
+        ),
+    ] {
+        case.bearing.damping = damping;
+        case.bearing.damping_model = model;
+        for method in methods {
+            let (with, s1) = run(&case, method, true);
+            let (without, s2) = run(&case, method, false);
+            assert_eq!(s1, s2, "{name} {method:?}");
+            assert!(bits(&with) == bits(&without), "{name} {method:?}");
+        }
+    }
+    // Without event location a latching law's step-end hook is where its onsets
+    // are latched: leaving it out changes the result.
+    case.bearing.damping = 0.0;
+    case.bearing.damping_model = restitution_law(RestitutionLaw::HuntCrossley, 0.8);
+    let (with, _) = run(&case, methods[1], true);
+    let (without, _) = run(&case, methods[1], false);
+    assert!(bits(&with) != bits(&without));
 }

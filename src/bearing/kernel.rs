@@ -543,9 +543,10 @@ impl BallSet {
             _ if params.damping_model.strength(params.damping) == 0.0 => {
                 (Law::Undamped, HysteresisRates::none())
             }
-            DampingModel::CompressionOnly => {
-                (Law::CompressionOnly(params.damping), HysteresisRates::none())
-            }
+            DampingModel::CompressionOnly => (
+                Law::CompressionOnly(params.damping),
+                HysteresisRates::none(),
+            ),
             DampingModel::TwoSided => (Law::TwoSided(params.damping), HysteresisRates::none()),
             DampingModel::HuntCrossleyAlpha { alpha } => {
                 (Law::Hysteresis, HysteresisRates::new(n, alpha, None))
@@ -898,9 +899,7 @@ impl BallSet {
                     Law::CompressionOnly(_) => elastic,
                     Law::TwoSided(c) if acting => elastic + c * approach,
                     Law::TwoSided(_) => 0.0,
-                    Law::Hysteresis if acting => {
-                        elastic * (1.0 + self.hysteresis.of(r) * approach)
-                    }
+                    Law::Hysteresis if acting => elastic * (1.0 + self.hysteresis.of(r) * approach),
                     Law::Hysteresis => 0.0,
                 };
                 (force, elastic)
@@ -1098,5 +1097,128 @@ impl LaneTask for Evaluate<'_> {
     #[inline(always)]
     fn run<V: Lanes>(self) -> BallSum {
         self.set.evaluate::<V>(self.s, self.regime, None).0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bearing::RestitutionLaw;
+
+    /// Three balls with 10 mm clearance: along +x only ball 0 can be loaded.
+    fn three_balls(model: DampingModel) -> BallSet {
+        BallSet::new(&BearingParams {
+            ball_count: 3,
+            clearance: 10e-3,
+            damping_model: model,
+            ..BearingParams::default()
+        })
+    }
+
+    /// Ball 0's deflection `d` (m) and approach speed `v` (m/s).
+    fn at(d: f64, v: f64) -> ContactState {
+        ContactState {
+            e: [5e-3 + d, 0.0],
+            v: [v, 0.0],
+            ..ContactState::default()
+        }
+    }
+
+    /// The latch takes the approach speed at the first loaded state of a contact,
+    /// keeps it while the ball stays loaded, and takes a new one (at least the
+    /// floor) at the next onset; the force is `K δ^{3/2} (1 + χ v / v₀)`.
+    #[test]
+    fn latch_holds_the_onset_speed_for_the_whole_contact() {
+        let law = RestitutionLaw::HuntCrossley;
+        let chi = law.chi(0.8);
+        let mut set = three_balls(DampingModel::Restitution {
+            law,
+            restitution: 0.8,
+        });
+        assert!(set.latches());
+        let force = |set: &BallSet, d: f64, v: f64| set.ball(0, &at(d, v)).force;
+        let hertz = |d: f64| 9.57e9 * d * d.sqrt();
+        // Before any contact the coefficient is 0: pure Hertz. (The deflection is
+        // rounded at the 5 mm offset, ~1e-12 relative: tolerances 1e-9.)
+        assert!((force(&set, 1e-6, 0.3) - hertz(1e-6)).abs() <= 1e-9 * hertz(1e-6));
+        set.latch(&at(1e-9, 0.05));
+        let expected = hertz(2e-6) * (1.0 + chi * 0.2 / 0.05);
+        assert!((force(&set, 2e-6, 0.2) - expected).abs() <= 1e-9 * expected);
+        // Still in contact: a faster state does not re-latch.
+        set.latch(&at(3e-6, 0.2));
+        assert!((force(&set, 2e-6, 0.2) - expected).abs() <= 1e-9 * expected);
+        // Out of contact, then a slow onset: the floor.
+        set.latch(&at(-1e-9, -0.05));
+        set.latch(&at(1e-9, 1e-5));
+        let slow = hertz(2e-6) * (1.0 + chi * 0.2 / ONSET_SPEED_FLOOR);
+        assert!((force(&set, 2e-6, 0.2) - slow).abs() <= 1e-9 * slow);
+        // Continuous at onset, and never pulling: 0 at δ = 0 and when opening fast.
+        assert_eq!(force(&set, 0.0, 5.0), 0.0);
+        assert_eq!(force(&set, 2e-6, -1.0), 0.0);
+    }
+
+    /// The other laws do not latch, and latching leaves their forces alone.
+    #[test]
+    fn laws_without_onset_speed_do_not_latch() {
+        for model in [
+            DampingModel::CompressionOnly,
+            DampingModel::TwoSided,
+            DampingModel::HuntCrossleyAlpha { alpha: 0.4 },
+        ] {
+            let mut set = three_balls(model);
+            assert!(!set.latches());
+            let before = set.ball(0, &at(2e-6, 0.1));
+            set.latch(&at(1e-9, 0.05));
+            assert_eq!(set.ball(0, &at(2e-6, 0.1)), before);
+        }
+        let set = three_balls(DampingModel::HuntCrossleyAlpha { alpha: 0.4 });
+        let f = set.ball(0, &at(2e-6, 0.1)).force;
+        let expected = 9.57e9 * 2e-6 * 2e-6f64.sqrt() * (1.0 + 0.4 * 0.1);
+        assert!((f - expected).abs() <= 1e-9 * expected);
+    }
+
+    /// The SIMD kernel equals the scalar twin for a latched law with different
+    /// coefficients on different balls, under the natural law and a held regime.
+    #[test]
+    fn hysteresis_kernel_matches_its_scalar_twin() {
+        let params = BearingParams {
+            ball_count: 11,
+            damping_model: DampingModel::Restitution {
+                law: RestitutionLaw::Flores,
+                restitution: 0.7,
+            },
+            ..BearingParams::default()
+        };
+        let mut set = BallSet::new(&params);
+        let state = |k: f64| ContactState {
+            e: [30e-6 * (0.7 * k).cos(), 30e-6 * (0.7 * k).sin()],
+            v: [0.02 * (1.3 * k).sin(), -0.03 * (0.4 * k).cos()],
+            cage: 0.37 * k,
+            psi_in: -0.2 * k,
+            psi_out: 0.37 * k,
+        };
+        for k in 0..40 {
+            set.latch(&state(f64::from(k)));
+        }
+        let s = state(40.5);
+        let mut regime = set.no_regime();
+        set.freeze(&s, None, &mut regime);
+        let moved = state(40.55);
+        for held in [None, Some(&regime)] {
+            let sum = match held {
+                None => set.force(&moved),
+                Some(r) => set.force_in(&moved, r),
+            };
+            let (mut fx, mut fy, mut largest) = (0.0, 0.0, 0.0f64);
+            for r in 0..set.len() {
+                let b = set.ball_in(r, &moved, held);
+                fx += b.force * b.normal[0];
+                fy += b.force * b.normal[1];
+                largest = largest.max(b.force.abs());
+            }
+            assert!(largest > 0.0);
+            assert!((sum.force[0] - fx).abs() <= 1e-12 * largest, "{held:?}");
+            assert!((sum.force[1] - fy).abs() <= 1e-12 * largest, "{held:?}");
+        }
     }
 }

@@ -1086,7 +1086,10 @@ fn damping_law(
             },
         },
     };
-    let name = b.damping_model.as_ref().map_or("compression_only", |m| m.value.as_str());
+    let name = b
+        .damping_model
+        .as_ref()
+        .map_or("compression_only", |m| m.value.as_str());
     let model_at = b.damping_model.as_ref().map(|m| at(&m.referenced));
     let unused = |key: &str, v: &S<Scalar>, uses: &str| {
         ctx.err(
@@ -1120,7 +1123,10 @@ fn damping_law(
             if let Some(v) = &b.restitution {
                 return Err(unused("restitution", v, RESTITUTION_LAWS));
             }
-            let v = b.alpha.as_ref().ok_or_else(|| missing("alpha", "a rate in s/m, >= 0"))?;
+            let v = b
+                .alpha
+                .as_ref()
+                .ok_or_else(|| missing("alpha", "a rate in s/m, >= 0"))?;
             if let Some(e) = effect_off("alpha", v) {
                 return Err(e);
             }
@@ -1150,7 +1156,10 @@ fn damping_law(
                 return Err(ctx.err(
                     Some(at(&v.referenced)),
                     "bearing.restitution",
-                    format!("{} is not allowed: a coefficient of restitution in (0, 1]", v.value),
+                    format!(
+                        "{} is not allowed: a coefficient of restitution in (0, 1]",
+                        v.value
+                    ),
                 ));
             }
             DampingModel::Restitution {
