@@ -452,6 +452,12 @@ fn bad_damping_law_keys_are_refused_naming_the_field() {
             "gonthier",
         ),
         (
+            grid("gonthier", "  restitution: 0.8\n")
+                .replace("  rpm: [600]", "  rpm: [600]\n  damping: [100]"),
+            "grid.damping[0]",
+            "do not use C",
+        ),
+        (
             grid("flores", "  restitution: 0.8\n").replace("grid:", "effects: [clearance]\ngrid:"),
             "bearing.restitution",
             "damping effect is off",

@@ -112,7 +112,8 @@ pub struct BearingParams {
     pub clearance: f64,
     /// Total ball contact stiffness `K` (N/m^1.5).
     pub stiffness: f64,
-    /// Contact damping `C` (N s/m); 0 turns damping off.
+    /// Contact damping `C` (N s/m) of [`DampingModel::CompressionOnly`] and
+    /// [`DampingModel::TwoSided`]; 0 turns them off, and it is 0 with the other laws.
     pub damping: f64,
     /// Which damping law acts on loaded balls.
     pub damping_model: DampingModel,
@@ -182,6 +183,18 @@ impl BearingParams {
             ));
         }
         non_negative("bearing.damping", self.damping)?;
+        if !matches!(
+            self.damping_model,
+            DampingModel::CompressionOnly | DampingModel::TwoSided
+        ) && self.damping != 0.0
+        {
+            return Err(ParamError::new(
+                "bearing.damping",
+                self.damping,
+                "0: the hysteresis damping laws do not use C (it belongs to compression_only \
+                 and two_sided)",
+            ));
+        }
         match self.damping_model {
             DampingModel::HuntCrossleyAlpha { alpha } => non_negative("bearing.alpha", alpha)?,
             DampingModel::Restitution { restitution, .. }

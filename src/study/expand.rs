@@ -1189,6 +1189,13 @@ fn damping_law(
             ),
         ));
     }
+    if matches!(
+        c.bearing.damping_model,
+        DampingModel::HuntCrossleyAlpha { .. } | DampingModel::Restitution { .. }
+    ) {
+        // C belongs to the other laws: 0 in the case and in its file.
+        c.bearing.damping = 0.0;
+    }
     Ok(())
 }
 
