@@ -284,6 +284,7 @@ fn the_units_table_lists_what_each_quantity_accepts() {
         Dimension::Speed,
         Dimension::Stiffness,
         Dimension::Damping,
+        Dimension::InverseSpeed,
         Dimension::Time,
         Dimension::Frequency,
         Dimension::Mass,

@@ -7,6 +7,7 @@ mod bearing_limits;
 mod cage_angle;
 mod cli;
 mod constraints;
+mod contact_laws;
 mod convergence;
 mod damaged_files;
 mod defects;

@@ -515,22 +515,30 @@ proptest! {
     /// another state its balls follow the continued law `K δ |δ|^{1/2}` whatever the
     /// sign of `δ`, on the damping branch they were on (compression-only: `C v_r` on
     /// the balls that were pushing, whatever its sign now; two-sided:
-    /// `K δ^{3/2} + C v_r` unclipped where it was positive, 0 elsewhere), the others
-    /// carry nothing, and the margin is the smallest `±δ` and `±` the damping
-    /// switch's distance (`v_r` × `APPROACH_MARGIN_TIME`, or the two-sided force ×
-    /// `APPROACH_MARGIN_TIME / C`), negative once a ball has switched.
+    /// `K δ^{3/2} + C v_r` unclipped where it was positive, 0 elsewhere; fixed
+    /// Hunt–Crossley: `K δ^{3/2} (1 + α v_r)` unclipped where it was positive), the
+    /// others carry nothing, and the margin is the smallest `±δ` and `±` the damping
+    /// switch's distance (`v_r` × `APPROACH_MARGIN_TIME`, the two-sided force ×
+    /// `APPROACH_MARGIN_TIME / C`, or `(1/α + v_r)` × `APPROACH_MARGIN_TIME`),
+    /// negative once a ball has switched.
     #[test]
     fn held_regime_continues_the_law_and_reports_the_margin(
         balls in 3usize..40,
         damping in prop_oneof![Just(0.0), 1.0f64..1e4],
-        two_sided in any::<bool>(),
+        law in 0usize..3,
         r in prop::array::uniform2(0.0f64..30e-6),
         angle in prop::array::uniform2(-10.0f64..10.0),
         v in prop::array::uniform2(-0.5f64..0.5),
         turns in prop::array::uniform2(-40.0f64..40.0),
         harmonics in (0usize..=2, 0usize..=2),
     ) {
-        let model = if two_sided { DampingModel::TwoSided } else { DampingModel::CompressionOnly };
+        // The fixed-coefficient Hunt–Crossley law takes α = C/1000 s/m (0 with C).
+        let alpha = damping * 1e-3;
+        let model = [
+            DampingModel::CompressionOnly,
+            DampingModel::TwoSided,
+            DampingModel::HuntCrossleyAlpha { alpha },
+        ][law];
         let params = kernel_params(balls, damping, model, harmonics);
         let mut set = BallSet::new(&params);
         let weights = CageWeights::of(&params);
@@ -576,6 +584,11 @@ proptest! {
                     margin_tol = margin_tol.max(1e-12 * (elastic.abs() + (damping * ball.approach).abs()) * scale);
                     (frozen_total > 0.0, total * scale)
                 }
+                DampingModel::HuntCrossleyAlpha { alpha } => (
+                    1.0 / alpha + frozen[b].approach > 0.0,
+                    (1.0 / alpha + ball.approach) * APPROACH_MARGIN_TIME,
+                ),
+                DampingModel::Restitution { .. } => unreachable!("not drawn"),
             };
             if damping > 0.0 {
                 margin = margin.min(if acting { distance } else { -distance });
@@ -586,6 +599,11 @@ proptest! {
                 DampingModel::CompressionOnly => elastic,
                 DampingModel::TwoSided if acting => total,
                 DampingModel::TwoSided => 0.0,
+                DampingModel::HuntCrossleyAlpha { alpha } if acting => {
+                    elastic * (1.0 + alpha * ball.approach)
+                }
+                DampingModel::HuntCrossleyAlpha { .. } => 0.0,
+                DampingModel::Restitution { .. } => unreachable!("not drawn"),
             };
             fx += f * ball.normal[0];
             fy += f * ball.normal[1];

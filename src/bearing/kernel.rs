@@ -139,18 +139,18 @@ pub trait DampingLaw: Copy {
     /// which an event-locating integrator should find like a contact onset.
     const SWITCHES: bool;
     /// All bits set where the law is on its acting branch, from `elastic`
-    /// (`K δ^{3/2}`, N) and the approach speeds `v_r` (m/s).
-    fn acting<V: Lanes>(self, elastic: V, v_r: V) -> V;
+    /// (`K δ^{3/2}`, N) and the approach speeds `v_r` (m/s) of ball vector `i`.
+    fn acting<V: Lanes>(self, i: usize, elastic: V, v_r: V) -> V;
     /// Signed distance (m) from the law's own switch, positive on the acting
     /// branch: the switching quantity scaled to metres by
     /// [`APPROACH_MARGIN_TIME`] (only its sign decides; the scale keeps it
     /// comparable with `δ` in [`BallSum::margin`]).
-    fn switch_distance<V: Lanes>(self, elastic: V, v_r: V) -> V;
-    /// Ball forces (N) from `elastic = K δ |δ|^{1/2}` (N), approach speeds `v_r`
-    /// (m/s), `loaded` (all bits set where the ball is loaded, else 0) and `acting`
+    fn switch_distance<V: Lanes>(self, i: usize, elastic: V, v_r: V) -> V;
+    /// Ball forces (N) of ball vector `i` from `elastic = K δ |δ|^{1/2}` (N),
+    /// approach speeds `v_r` (m/s), `loaded` (all bits set where the ball is loaded, else 0) and `acting`
     /// (all bits set where the law is on its acting branch, naturally or as a held
     /// regime says).
-    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V;
+    fn force<V: Lanes>(self, i: usize, elastic: V, v_r: V, loaded: V, acting: V) -> V;
 }
 
 /// Weight (s) of a damping switch in [`BallSum::margin`]: `v_r` (m/s) counts as the
@@ -319,17 +319,17 @@ impl DampingLaw for Undamped {
     const SWITCHES: bool = false;
 
     #[inline(always)]
-    fn acting<V: Lanes>(self, _elastic: V, _v_r: V) -> V {
+    fn acting<V: Lanes>(self, _i: usize, _elastic: V, _v_r: V) -> V {
         V::zero()
     }
 
     #[inline(always)]
-    fn switch_distance<V: Lanes>(self, _elastic: V, _v_r: V) -> V {
+    fn switch_distance<V: Lanes>(self, _i: usize, _elastic: V, _v_r: V) -> V {
         V::splat(f64::INFINITY)
     }
 
     #[inline(always)]
-    fn force<V: Lanes>(self, elastic: V, _v_r: V, _loaded: V, _acting: V) -> V {
+    fn force<V: Lanes>(self, _i: usize, elastic: V, _v_r: V, _loaded: V, _acting: V) -> V {
         elastic
     }
 }
@@ -339,17 +339,17 @@ impl DampingLaw for CompressionOnly {
     const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn acting<V: Lanes>(self, _elastic: V, v_r: V) -> V {
+    fn acting<V: Lanes>(self, _i: usize, _elastic: V, v_r: V) -> V {
         v_r.simd_gt(V::zero())
     }
 
     #[inline(always)]
-    fn switch_distance<V: Lanes>(self, _elastic: V, v_r: V) -> V {
+    fn switch_distance<V: Lanes>(self, _i: usize, _elastic: V, v_r: V) -> V {
         v_r * V::splat(APPROACH_MARGIN_TIME)
     }
 
     #[inline(always)]
-    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V {
+    fn force<V: Lanes>(self, _i: usize, elastic: V, v_r: V, loaded: V, acting: V) -> V {
         elastic + ((V::splat(self.0) * v_r) & (loaded & acting))
     }
 }
@@ -361,19 +361,112 @@ impl DampingLaw for TwoSided {
     const SWITCHES: bool = true;
 
     #[inline(always)]
-    fn acting<V: Lanes>(self, elastic: V, v_r: V) -> V {
+    fn acting<V: Lanes>(self, _i: usize, elastic: V, v_r: V) -> V {
         (elastic + V::splat(self.0) * v_r).simd_gt(V::zero())
     }
 
     #[inline(always)]
-    fn switch_distance<V: Lanes>(self, elastic: V, v_r: V) -> V {
+    fn switch_distance<V: Lanes>(self, _i: usize, elastic: V, v_r: V) -> V {
         let total = elastic + V::splat(self.0) * v_r;
         total * V::splat(APPROACH_MARGIN_TIME / self.0)
     }
 
     #[inline(always)]
-    fn force<V: Lanes>(self, elastic: V, v_r: V, loaded: V, acting: V) -> V {
+    fn force<V: Lanes>(self, _i: usize, elastic: V, v_r: V, loaded: V, acting: V) -> V {
         (elastic + V::splat(self.0) * v_r) & (loaded & acting)
+    }
+}
+
+/// The hysteresis-damping laws of docs/model.md §2.5:
+/// `F_r = max(K δ^{3/2} (1 + c_r v_r), 0)` on loaded balls, with a per-ball rate
+/// coefficient `c_r` (s/m): `α` for every ball (fixed-coefficient Hunt–Crossley),
+/// or `χ/v₀,r` with the approach speed `v₀,r` latched at the ball's contact onset
+/// ([`BallSet::latch`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Hysteresis<'a> {
+    /// `c_r` per ball vector (s/m).
+    rate: &'a [F64x4],
+    /// `1/c_r` per ball vector (m/s; +∞ where `c_r` = 0).
+    speed: &'a [F64x4],
+}
+
+/// Acting where `1 + c_r v_r > 0` (the ball pushes), i.e. where `1/c_r + v_r > 0`;
+/// the switch distance is that speed × [`APPROACH_MARGIN_TIME`].
+impl DampingLaw for Hysteresis<'_> {
+    const SWITCHES: bool = true;
+
+    #[inline(always)]
+    fn acting<V: Lanes>(self, i: usize, _elastic: V, v_r: V) -> V {
+        (V::load(&self.speed[i]) + v_r).simd_gt(V::zero())
+    }
+
+    #[inline(always)]
+    fn switch_distance<V: Lanes>(self, i: usize, _elastic: V, v_r: V) -> V {
+        (V::load(&self.speed[i]) + v_r) * V::splat(APPROACH_MARGIN_TIME)
+    }
+
+    #[inline(always)]
+    fn force<V: Lanes>(self, i: usize, elastic: V, v_r: V, loaded: V, acting: V) -> V {
+        let factor = V::splat(1.0) + V::load(&self.rate[i]) * v_r;
+        (elastic * factor) & (loaded & acting)
+    }
+}
+
+/// Slowest approach speed (m/s) a restitution-based law latches: a slower onset
+/// (a ball loaded quasi-statically, or at rest under preload) is damped as if it
+/// had approached at this speed, so `χ/v₀` stays bounded (docs/model.md §2.5).
+pub const ONSET_SPEED_FLOOR: f64 = 1e-3;
+
+/// The per-ball rate coefficients of a [`Hysteresis`] law and, for the
+/// restitution-based laws, what latching them needs.
+#[derive(Debug, Clone)]
+struct HysteresisRates {
+    /// `c_r` per ball (s/m); 0 on pads.
+    rate: Vec<F64x4>,
+    /// `1/c_r` per ball (m/s); +∞ where `c_r` = 0.
+    speed: Vec<F64x4>,
+    /// `χ` of a restitution-based law, `None` for a fixed coefficient.
+    chi: Option<f64>,
+    /// Whether each ball was loaded at the last [`BallSet::latch`].
+    in_contact: Vec<bool>,
+}
+
+impl HysteresisRates {
+    /// Sets ball `r`'s coefficient to `c` (s/m).
+    fn set(&mut self, r: usize, c: f64) {
+        self.rate[r / LANES].0[r % LANES] = c;
+        self.speed[r / LANES].0[r % LANES] = 1.0 / c;
+    }
+
+    /// Ball `r`'s coefficient `c_r` (s/m).
+    fn of(&self, r: usize) -> f64 {
+        self.rate[r / LANES].0[r % LANES]
+    }
+
+    /// No coefficients: the set of a law other than [`Law::Hysteresis`].
+    fn none() -> Self {
+        Self {
+            rate: Vec::new(),
+            speed: Vec::new(),
+            chi: None,
+            in_contact: Vec::new(),
+        }
+    }
+
+    /// Coefficients `c` (s/m) on each of `balls` balls, and with `chi` a
+    /// restitution-based law's `χ` for [`BallSet::latch`]. Pads get `c` = 0.
+    fn new(balls: usize, c: f64, chi: Option<f64>) -> Self {
+        let vectors = balls.div_ceil(LANES);
+        let mut rates = Self {
+            rate: vec![F64x4::ZERO; vectors],
+            speed: vec![F64x4([f64::INFINITY; LANES]); vectors],
+            chi,
+            in_contact: vec![false; balls],
+        };
+        for r in 0..balls {
+            rates.set(r, c);
+        }
+        rates
     }
 }
 
@@ -406,6 +499,8 @@ enum Law {
     Undamped,
     CompressionOnly(f64),
     TwoSided(f64),
+    /// [`Hysteresis`] with the coefficients in [`BallSet::hysteresis`].
+    Hysteresis,
 }
 
 /// The ball set of one bearing, laid out for [`BallSet::force`].
@@ -437,6 +532,8 @@ pub struct BallSet {
     turning: Option<Turning>,
     /// The defect tracks, if the case has defects of nonzero depth.
     defects: Option<Defects>,
+    /// The per-ball coefficients of [`Law::Hysteresis`] (empty for other laws).
+    hysteresis: HysteresisRates,
 }
 
 /// Races that turn in proportion to one angle `θ` (rad): the journal by
@@ -491,10 +588,22 @@ impl BallSet {
             -0.5 * params.clearance + params.inner_waviness.offset + params.outer_waviness.offset;
         let mut waves = waves_of(&params.inner_waviness, Race::Inner);
         waves.extend(waves_of(&params.outer_waviness, Race::Outer));
-        let law = match (params.damping > 0.0, params.damping_model) {
-            (false, _) => Law::Undamped,
-            (true, DampingModel::CompressionOnly) => Law::CompressionOnly(params.damping),
-            (true, DampingModel::TwoSided) => Law::TwoSided(params.damping),
+        let (law, hysteresis) = match params.damping_model {
+            _ if params.damping_model.strength(params.damping) == 0.0 => {
+                (Law::Undamped, HysteresisRates::none())
+            }
+            DampingModel::CompressionOnly => (
+                Law::CompressionOnly(params.damping),
+                HysteresisRates::none(),
+            ),
+            DampingModel::TwoSided => (Law::TwoSided(params.damping), HysteresisRates::none()),
+            DampingModel::HuntCrossleyAlpha { alpha } => {
+                (Law::Hysteresis, HysteresisRates::new(n, alpha, None))
+            }
+            DampingModel::Restitution { law, restitution } => {
+                let chi = law.chi(restitution);
+                (Law::Hysteresis, HysteresisRates::new(n, 0.0, Some(chi)))
+            }
         };
         Self {
             balls: n,
@@ -511,6 +620,7 @@ impl BallSet {
             waves,
             turning: None,
             defects: Defects::of(params),
+            hysteresis,
         }
     }
 
@@ -542,6 +652,41 @@ impl BallSet {
             trig: AffineSinCos::new(rates),
         });
         true
+    }
+
+    /// Whether the damping law latches each ball's approach speed at its contact
+    /// onset ([`BallSet::latch`]): the restitution-based laws of docs/model.md §2.5.
+    pub fn latches(&self) -> bool {
+        self.law == Law::Hysteresis && self.hysteresis.chi.is_some()
+    }
+
+    /// Latches the approach speed of every ball that is loaded at state `s`
+    /// (`δ_r > 0`) and was not at the previous call: its rate coefficient becomes
+    /// `c_r = χ / max(v_r, v_floor)` with [`ONSET_SPEED_FLOOR`] (docs/model.md §2.5).
+    /// A ball unloaded at `s` keeps its coefficient until its next onset. Does
+    /// nothing unless [`BallSet::latches`].
+    ///
+    /// The integrators call it through the model at every accepted step end and at
+    /// every regime hold, so a located contact onset latches the speed at the
+    /// onset itself; without event location the speed at the end of the first
+    /// accepted step in contact is latched, and until then the ball carries the
+    /// coefficient of its previous contact (0 before its first).
+    pub fn latch(&mut self, s: &ContactState) {
+        let Some(chi) = self.hysteresis.chi.filter(|_| self.law == Law::Hysteresis) else {
+            return;
+        };
+        for r in 0..self.balls {
+            let b = self.ball(r, s);
+            let rates = &mut self.hysteresis;
+            if b.delta > 0.0 {
+                if !rates.in_contact[r] {
+                    rates.set(r, chi / b.approach.max(ONSET_SPEED_FLOOR));
+                    rates.in_contact[r] = true;
+                }
+            } else {
+                rates.in_contact[r] = false;
+            }
+        }
     }
 
     /// Number of balls `N_b`.
@@ -731,6 +876,14 @@ impl BallSet {
                 sum_balls::<V, _, _, _>(balls, s, trig, k, CompressionOnly(c), rule)
             }
             Law::TwoSided(c) => sum_balls::<V, _, _, _>(balls, s, trig, k, TwoSided(c), rule),
+            Law::Hysteresis => {
+                let n = self.dir_cos.len();
+                let law = Hysteresis {
+                    rate: &self.hysteresis.rate[..n],
+                    speed: &self.hysteresis.speed[..n],
+                };
+                sum_balls::<V, _, _, _>(balls, s, trig, k, law, rule)
+            }
         }
     }
 
@@ -841,6 +994,9 @@ impl BallSet {
                     Law::Undamped => elastic,
                     Law::CompressionOnly(c) => elastic + c * approach.max(0.0),
                     Law::TwoSided(c) => (elastic + c * approach).max(0.0),
+                    Law::Hysteresis => {
+                        (elastic * (1.0 + self.hysteresis.of(r) * approach)).max(0.0)
+                    }
                 };
                 (force, elastic)
             }
@@ -853,6 +1009,8 @@ impl BallSet {
                     Law::CompressionOnly(_) => elastic,
                     Law::TwoSided(c) if acting => elastic + c * approach,
                     Law::TwoSided(_) => 0.0,
+                    Law::Hysteresis if acting => elastic * (1.0 + self.hysteresis.of(r) * approach),
+                    Law::Hysteresis => 0.0,
                 };
                 (force, elastic)
             }
@@ -1012,11 +1170,11 @@ fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule, O: Offsets<V>>(
         let (mask, d) = rule.load(i, delta);
         let v_r = vx * nx + vy * ny;
         let elastic = k * d * d.abs().sqrt();
-        let acting = rule.acting(i, law.acting(elastic, v_r));
+        let acting = rule.acting(i, law.acting(i, elastic, v_r));
         let lane = LaneState {
             delta,
             distance: if D::SWITCHES {
-                law.switch_distance(elastic, v_r)
+                law.switch_distance(i, elastic, v_r)
             } else {
                 V::zero()
             },
@@ -1024,7 +1182,7 @@ fn sum_balls<V: Lanes, D: DampingLaw, R: LoadRule, O: Offsets<V>>(
             acting,
         };
         margin = rule.margin(margin, lane, D::SWITCHES);
-        let f = law.force(elastic, v_r, mask, acting);
+        let f = law.force(i, elastic, v_r, mask, acting);
         fx += f * nx;
         fy += f * ny;
         loaded += V::splat(1.0) & mask;
@@ -1049,5 +1207,128 @@ impl LaneTask for Evaluate<'_> {
     #[inline(always)]
     fn run<V: Lanes>(self) -> BallSum {
         self.set.evaluate::<V>(self.s, self.regime, None).0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bearing::RestitutionLaw;
+
+    /// Three balls with 10 mm clearance: along +x only ball 0 can be loaded.
+    fn three_balls(model: DampingModel) -> BallSet {
+        BallSet::new(&BearingParams {
+            ball_count: 3,
+            clearance: 10e-3,
+            damping_model: model,
+            ..BearingParams::default()
+        })
+    }
+
+    /// Ball 0's deflection `d` (m) and approach speed `v` (m/s).
+    fn at(d: f64, v: f64) -> ContactState {
+        ContactState {
+            e: [5e-3 + d, 0.0],
+            v: [v, 0.0],
+            ..ContactState::default()
+        }
+    }
+
+    /// The latch takes the approach speed at the first loaded state of a contact,
+    /// keeps it while the ball stays loaded, and takes a new one (at least the
+    /// floor) at the next onset; the force is `K δ^{3/2} (1 + χ v / v₀)`.
+    #[test]
+    fn latch_holds_the_onset_speed_for_the_whole_contact() {
+        let law = RestitutionLaw::HuntCrossley;
+        let chi = law.chi(0.8);
+        let mut set = three_balls(DampingModel::Restitution {
+            law,
+            restitution: 0.8,
+        });
+        assert!(set.latches());
+        let force = |set: &BallSet, d: f64, v: f64| set.ball(0, &at(d, v)).force;
+        let hertz = |d: f64| 9.57e9 * d * d.sqrt();
+        // Before any contact the coefficient is 0: pure Hertz. (The deflection is
+        // rounded at the 5 mm offset, ~1e-12 relative: tolerances 1e-9.)
+        assert!((force(&set, 1e-6, 0.3) - hertz(1e-6)).abs() <= 1e-9 * hertz(1e-6));
+        set.latch(&at(1e-9, 0.05));
+        let expected = hertz(2e-6) * (1.0 + chi * 0.2 / 0.05);
+        assert!((force(&set, 2e-6, 0.2) - expected).abs() <= 1e-9 * expected);
+        // Still in contact: a faster state does not re-latch.
+        set.latch(&at(3e-6, 0.2));
+        assert!((force(&set, 2e-6, 0.2) - expected).abs() <= 1e-9 * expected);
+        // Out of contact, then a slow onset: the floor.
+        set.latch(&at(-1e-9, -0.05));
+        set.latch(&at(1e-9, 1e-5));
+        let slow = hertz(2e-6) * (1.0 + chi * 0.2 / ONSET_SPEED_FLOOR);
+        assert!((force(&set, 2e-6, 0.2) - slow).abs() <= 1e-9 * slow);
+        // Continuous at onset, and never pulling: 0 at δ = 0 and when opening fast.
+        assert_eq!(force(&set, 0.0, 5.0), 0.0);
+        assert_eq!(force(&set, 2e-6, -1.0), 0.0);
+    }
+
+    /// The other laws do not latch, and latching leaves their forces alone.
+    #[test]
+    fn laws_without_onset_speed_do_not_latch() {
+        for model in [
+            DampingModel::CompressionOnly,
+            DampingModel::TwoSided,
+            DampingModel::HuntCrossleyAlpha { alpha: 0.4 },
+        ] {
+            let mut set = three_balls(model);
+            assert!(!set.latches());
+            let before = set.ball(0, &at(2e-6, 0.1));
+            set.latch(&at(1e-9, 0.05));
+            assert_eq!(set.ball(0, &at(2e-6, 0.1)), before);
+        }
+        let set = three_balls(DampingModel::HuntCrossleyAlpha { alpha: 0.4 });
+        let f = set.ball(0, &at(2e-6, 0.1)).force;
+        let expected = 9.57e9 * 2e-6 * 2e-6f64.sqrt() * (1.0 + 0.4 * 0.1);
+        assert!((f - expected).abs() <= 1e-9 * expected);
+    }
+
+    /// The SIMD kernel equals the scalar twin for a latched law with different
+    /// coefficients on different balls, under the natural law and a held regime.
+    #[test]
+    fn hysteresis_kernel_matches_its_scalar_twin() {
+        let params = BearingParams {
+            ball_count: 11,
+            damping_model: DampingModel::Restitution {
+                law: RestitutionLaw::Flores,
+                restitution: 0.7,
+            },
+            ..BearingParams::default()
+        };
+        let mut set = BallSet::new(&params);
+        let state = |k: f64| ContactState {
+            e: [30e-6 * (0.7 * k).cos(), 30e-6 * (0.7 * k).sin()],
+            v: [0.02 * (1.3 * k).sin(), -0.03 * (0.4 * k).cos()],
+            cage: 0.37 * k,
+            psi_in: -0.2 * k,
+            psi_out: 0.37 * k,
+        };
+        for k in 0..40 {
+            set.latch(&state(f64::from(k)));
+        }
+        let s = state(40.5);
+        let mut regime = set.no_regime();
+        set.freeze(&s, None, &mut regime);
+        let moved = state(40.55);
+        for held in [None, Some(&regime)] {
+            let sum = match held {
+                None => set.force(&moved),
+                Some(r) => set.force_in(&moved, r),
+            };
+            let (mut fx, mut fy, mut largest) = (0.0, 0.0, 0.0f64);
+            for r in 0..set.len() {
+                let b = set.ball_in(r, &moved, held);
+                fx += b.force * b.normal[0];
+                fy += b.force * b.normal[1];
+                largest = largest.max(b.force.abs());
+            }
+            assert!(largest > 0.0);
+            assert!((sum.force[0] - fx).abs() <= 1e-12 * largest, "{held:?}");
+            assert!((sum.force[1] - fy).abs() <= 1e-12 * largest, "{held:?}");
+        }
     }
 }

@@ -4,7 +4,7 @@
 //! Ball `r` sits at the global angle `φ_r = 2π(r−1)/N_b + φ_c`, with the cage angle
 //! in closed form `φ_c = [d_i Δθ_j + d_o Δθ_h] / (d_i + d_o)` (no extra state).
 //! Its deflection is `δ_r = e·n_r − P_d/2 + Π_i,r + Π_o,r` and, while `δ_r > 0`,
-//! its force `F_r = K δ_r^{3/2} + C max(v_r, 0)` (or the two-sided variant). The
+//! its force `F_r = K δ_r^{3/2} + C max(v_r, 0)` (or another law of [`DampingModel`]). The
 //! housing receives `F = Σ F_r n_r` at its race centre, the journal `−F` at its.
 
 pub mod defect;
@@ -13,21 +13,92 @@ pub mod stiffness;
 mod waviness;
 
 pub use defect::{fault_label, Defect, DefectProfile, DefectRace};
-pub use kernel::{BallSet, BallSum, ContactState, Regime};
+pub use kernel::{BallSet, BallSum, ContactState, Regime, ONSET_SPEED_FLOOR};
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
 use crate::error::ParamError;
 use crate::multibody::BodyRef;
 use crate::multibody::{add_point_force, ElementEnergy, ForceElement, Pose};
 
-/// How contact damping acts on a loaded ball.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How contact damping acts on a loaded ball (docs/model.md §2.5).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum DampingModel {
     /// The paper's eq. 28 read literally: `C max(v_r, 0)`, only while compressing.
     #[default]
     CompressionOnly,
     /// `max(K δ^{3/2} + C v_r, 0)`: damping in both directions, ball force never pulls.
     TwoSided,
+    /// Hunt–Crossley with a fixed coefficient: `max(K δ^{3/2} (1 + α v_r), 0)`.
+    HuntCrossleyAlpha {
+        /// `α` (s/m), ≥ 0.
+        alpha: f64,
+    },
+    /// A hysteresis law set by a coefficient of restitution:
+    /// `max(K δ^{3/2} (1 + χ(e) v_r / v₀,r), 0)` with the approach speed `v₀,r`
+    /// latched at the ball's contact onset.
+    Restitution {
+        /// Which published `χ(e)`.
+        law: RestitutionLaw,
+        /// Coefficient of restitution `e`, in (0, 1].
+        restitution: f64,
+    },
+}
+
+impl DampingModel {
+    /// The law's strength for damping coefficient `damping` (N s/m): `C` for
+    /// compression-only and two-sided damping, `α` (s/m), or `χ(e)`; a law whose
+    /// strength is 0 does not damp.
+    pub fn strength(self, damping: f64) -> f64 {
+        match self {
+            DampingModel::CompressionOnly | DampingModel::TwoSided => damping,
+            DampingModel::HuntCrossleyAlpha { alpha } => alpha,
+            DampingModel::Restitution { law, restitution } => law.chi(restitution),
+        }
+    }
+}
+
+/// The restitution-based hysteresis laws: each sets `χ` of
+/// `F = K δ^{3/2} (1 + χ δ̇/v₀)` from the coefficient of restitution `e`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestitutionLaw {
+    /// Hunt & Crossley (1975): `χ = 3(1 − e)/2`.
+    HuntCrossley,
+    /// Lankarani & Nikravesh (1990): `χ = 3(1 − e²)/4`.
+    LankaraniNikravesh,
+    /// Flores, Machado, Silva & Martins (2011): `χ = 8(1 − e)/(5e)`.
+    Flores,
+    /// Gonthier, McPhee, Lange & Piedbœuf (2004): `χ = (1 − e²)/e`.
+    Gonthier,
+}
+
+impl RestitutionLaw {
+    /// `χ` (dimensionless) for coefficient of restitution `e`.
+    pub fn chi(self, e: f64) -> f64 {
+        match self {
+            RestitutionLaw::HuntCrossley => 1.5 * (1.0 - e),
+            RestitutionLaw::LankaraniNikravesh => 0.75 * (1.0 - e * e),
+            RestitutionLaw::Flores => 1.6 * (1.0 - e) / e,
+            RestitutionLaw::Gonthier => (1.0 - e * e) / e,
+        }
+    }
+
+    /// The law's name in grid files.
+    pub fn name(self) -> &'static str {
+        match self {
+            RestitutionLaw::HuntCrossley => "hunt_crossley",
+            RestitutionLaw::LankaraniNikravesh => "lankarani_nikravesh",
+            RestitutionLaw::Flores => "flores",
+            RestitutionLaw::Gonthier => "gonthier",
+        }
+    }
+
+    /// Every law, in the order of the grid file's documentation.
+    pub const ALL: [RestitutionLaw; 4] = [
+        RestitutionLaw::HuntCrossley,
+        RestitutionLaw::LankaraniNikravesh,
+        RestitutionLaw::Flores,
+        RestitutionLaw::Gonthier,
+    ];
 }
 
 /// Bearing parameters (SI units; defaults: SKF 98205 of the paper's Table 2).
@@ -43,7 +114,8 @@ pub struct BearingParams {
     pub clearance: f64,
     /// Total ball contact stiffness `K` (N/m^1.5).
     pub stiffness: f64,
-    /// Contact damping `C` (N s/m); 0 turns damping off.
+    /// Contact damping `C` (N s/m) of [`DampingModel::CompressionOnly`] and
+    /// [`DampingModel::TwoSided`]; 0 turns them off, and it is 0 with the other laws.
     pub damping: f64,
     /// Which damping law acts on loaded balls.
     pub damping_model: DampingModel,
@@ -120,6 +192,31 @@ impl BearingParams {
             ));
         }
         non_negative("bearing.damping", self.damping)?;
+        if !matches!(
+            self.damping_model,
+            DampingModel::CompressionOnly | DampingModel::TwoSided
+        ) && self.damping != 0.0
+        {
+            return Err(ParamError::new(
+                "bearing.damping",
+                self.damping,
+                "0: the hysteresis damping laws do not use C (it belongs to compression_only \
+                 and two_sided)",
+            ));
+        }
+        match self.damping_model {
+            DampingModel::HuntCrossleyAlpha { alpha } => non_negative("bearing.alpha", alpha)?,
+            DampingModel::Restitution { restitution, .. }
+                if !(restitution > 0.0 && restitution <= 1.0) =>
+            {
+                return Err(ParamError::new(
+                    "bearing.restitution",
+                    restitution,
+                    "a coefficient of restitution in (0, 1]",
+                ));
+            }
+            _ => {}
+        }
         self.inner_waviness.validate("bearing.inner_waviness")?;
         self.outer_waviness.validate("bearing.outer_waviness")?;
         positive("bearing.geometry.ball_diameter", self.ball_diameter)?;
@@ -241,8 +338,21 @@ struct Kinematics {
 
 impl BallBearing {
     /// A bearing with `params` (validated here) at `mount`.
+    ///
+    /// The restitution-based laws are refused: they latch each ball's approach
+    /// speed at its contact onset, which needs the integrator's step ends
+    /// ([`BallSet::latch`]), and the force element has none.
     pub fn new(params: &BearingParams, mount: Mounting) -> Result<Self, ParamError> {
         params.validate()?;
+        if let DampingModel::Restitution { law, .. } = params.damping_model {
+            return Err(ParamError::new(
+                "bearing.damping_model",
+                law.name(),
+                "compression_only, two_sided or hunt_crossley_alpha in the Cartesian \
+                 reference model (a restitution-based law latches approach speeds at \
+                 step ends, which only the production model provides)",
+            ));
+        }
         Ok(Self {
             mount,
             weights: CageWeights::of(params),

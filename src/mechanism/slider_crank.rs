@@ -458,6 +458,16 @@ impl SliderCrank {
         })
     }
 
+    /// The bearing's contact state at time `t` (s) and state `y` of a bearing case,
+    /// and the crank angle (rad) then.
+    fn bearing_state(&self, t: f64, y: &[f64]) -> Result<(ContactState, f64), ModelError> {
+        let motion = self.drive.motion(t);
+        let crank = motion.angle;
+        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
+        let kin = self.k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
+        Ok((self.contact_state(crank, &kin, e, ed), crank))
+    }
+
     /// The bearing's contact state at crank angle `crank` (rad) with kinematics `kin`.
     fn contact_state(
         &self,
@@ -744,21 +754,30 @@ impl OdeSystem for SliderCrank {
         Ok(())
     }
 
+    /// Latches the approach speeds of balls whose contact began (restitution-based
+    /// damping laws only, docs/model.md §2.5); nothing else.
+    fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        if self.bearing.as_ref().is_some_and(|w| w.balls.latches()) {
+            let (state, _) = self.bearing_state(t, y)?;
+            if let Some(w) = self.bearing.as_mut() {
+                w.balls.latch(&state);
+            }
+        }
+        Ok(())
+    }
+
     fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
         if self.bearing.is_none() {
             return Ok(false);
         }
-        let k = &self.k;
-        let motion = self.drive.motion(t);
-        let crank = motion.angle;
-        let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
-        let kin = k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
-        let (journal_turn, housing_turn) = race_turns(self.location, crank, &kin);
+        let (state, crank) = self.bearing_state(t, y)?;
+        let angle = (self.location == Location::CrankGround).then_some(crank);
         let Some(w) = self.bearing.as_mut() else {
             return Ok(false);
         };
-        let state = w.weights.contact_state(e, ed, journal_turn, housing_turn);
-        let angle = (self.location == Location::CrankGround).then_some(crank);
+        // A located onset latches its approach speed before the regime's
+        // damping branches are recorded from it.
+        w.balls.latch(&state);
         w.balls.freeze(&state, angle, &mut w.regime);
         w.held = true;
         Ok(true)

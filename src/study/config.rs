@@ -179,8 +179,14 @@ pub struct BearingSection {
     /// A number/quantity (N/m^1.5) or `harris` (computed from `geometry`).
     pub stiffness: Option<S<Scalar>>,
     pub damping: Option<S<Scalar>>,
-    /// `compression_only` (default) or `two_sided`.
+    /// `compression_only` (default), `two_sided`, `hunt_crossley_alpha`, or a
+    /// restitution-based law: `hunt_crossley`, `lankarani_nikravesh`, `flores`,
+    /// `gonthier`.
     pub damping_model: Option<S<String>>,
+    /// Coefficient of restitution of a restitution-based `damping_model`.
+    pub restitution: Option<S<Scalar>>,
+    /// `α` (s/m) of `damping_model: hunt_crossley_alpha`.
+    pub alpha: Option<S<Scalar>>,
     pub inner_race_diameter: Option<S<Scalar>>,
     pub outer_race_diameter: Option<S<Scalar>>,
     /// Waviness of both races.

@@ -6,8 +6,8 @@ use std::path::Path;
 use serde_saphyr::Location;
 
 use super::config::{
-    BandValue, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection, Scalar,
-    SpectraSection, SpeedSection, WavinessSection, S,
+    BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
+    Scalar, SpectraSection, SpeedSection, WavinessSection, S,
 };
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -16,7 +16,9 @@ use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
 use crate::bearing::stiffness::ContactGeometry;
-use crate::bearing::{DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness};
+use crate::bearing::{
+    DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
+};
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
@@ -1250,6 +1252,7 @@ fn finish_case(
     }
     if !effects.damping {
         params.bearing.damping = 0.0;
+        params.bearing.damping_model = DampingModel::CompressionOnly;
     }
     if !effects.defects {
         params.bearing.defects.clear();
@@ -1402,19 +1405,7 @@ fn base_case(
             }
             other => set(&mut c, "stiffness", other, "bearing.stiffness", prov)?,
         }
-        if let Some(m) = &b.damping_model {
-            c.bearing.damping_model = match m.value.as_str() {
-                "compression_only" => DampingModel::CompressionOnly,
-                "two_sided" => DampingModel::TwoSided,
-                other => {
-                    return Err(ctx.err(
-                        Some(at(&m.referenced)),
-                        "bearing.damping_model",
-                        format!("`{other}` is not allowed: compression_only or two_sided"),
-                    ))
-                }
-            };
-        }
+        damping_law(ctx, &mut c, b, effects)?;
         for (race, section) in [
             ("", &b.waviness),
             ("inner_", &b.inner_waviness),
@@ -1449,6 +1440,150 @@ fn base_case(
     }
     set(&mut c, "location", &file.location, "location", prov)?;
     Ok(c)
+}
+
+/// `bearing.damping_model` with its `restitution` or `alpha` (docs/model.md §2.5):
+/// each key only with the laws that use it, the values in range.
+fn damping_law(
+    ctx: &Ctx<'_>,
+    c: &mut CaseParams,
+    b: &BearingSection,
+    effects: &Effects,
+) -> Result<(), StudyError> {
+    const NAMES: &str = "compression_only, two_sided, hunt_crossley_alpha, hunt_crossley, \
+                         lankarani_nikravesh, flores or gonthier";
+    let model = match &b.damping_model {
+        None => DampingModel::CompressionOnly,
+        Some(m) => match m.value.as_str() {
+            "compression_only" => DampingModel::CompressionOnly,
+            "two_sided" => DampingModel::TwoSided,
+            "hunt_crossley_alpha" => DampingModel::HuntCrossleyAlpha { alpha: 0.0 },
+            name => match RestitutionLaw::ALL.into_iter().find(|l| l.name() == name) {
+                Some(law) => DampingModel::Restitution {
+                    law,
+                    restitution: 1.0,
+                },
+                None => {
+                    return Err(ctx.err(
+                        Some(at(&m.referenced)),
+                        "bearing.damping_model",
+                        format!("`{name}` is not allowed: {NAMES}"),
+                    ))
+                }
+            },
+        },
+    };
+    let name = b
+        .damping_model
+        .as_ref()
+        .map_or("compression_only", |m| m.value.as_str());
+    let model_at = b.damping_model.as_ref().map(|m| at(&m.referenced));
+    let unused = |key: &str, v: &S<Scalar>, uses: &str| {
+        ctx.err(
+            Some(at(&v.referenced)),
+            &format!("bearing.{key}"),
+            format!("damping_model {name} does not use {key}; {key} belongs to {uses}"),
+        )
+    };
+    let effect_off = |key: &str, v: &S<Scalar>| {
+        (!effects.damping).then(|| {
+            ctx.err(
+                Some(at(&v.referenced)),
+                &format!("bearing.{key}"),
+                format!(
+                    "the damping effect is off (effects: [{}]); add `damping` to `effects` to set it",
+                    effects.names().join(", ")
+                ),
+            )
+        })
+    };
+    let missing = |key: &str, what: &str| {
+        ctx.err(
+            model_at,
+            &format!("bearing.{key}"),
+            format!("damping_model {name} needs `{key}`: {what}"),
+        )
+    };
+    const RESTITUTION_LAWS: &str = "hunt_crossley, lankarani_nikravesh, flores and gonthier";
+    c.bearing.damping_model = match model {
+        DampingModel::HuntCrossleyAlpha { .. } => {
+            if let Some(v) = &b.restitution {
+                return Err(unused("restitution", v, RESTITUTION_LAWS));
+            }
+            let v = b
+                .alpha
+                .as_ref()
+                .ok_or_else(|| missing("alpha", "a rate in s/m, >= 0"))?;
+            if let Some(e) = effect_off("alpha", v) {
+                return Err(e);
+            }
+            let alpha = ctx.quantity(v, Dimension::InverseSpeed, "bearing.alpha")?;
+            if !(alpha.is_finite() && alpha >= 0.0) {
+                return Err(ctx.err(
+                    Some(at(&v.referenced)),
+                    "bearing.alpha",
+                    format!("{} is not allowed: a finite rate >= 0 s/m", v.value),
+                ));
+            }
+            DampingModel::HuntCrossleyAlpha { alpha }
+        }
+        DampingModel::Restitution { law, .. } => {
+            if let Some(v) = &b.alpha {
+                return Err(unused("alpha", v, "hunt_crossley_alpha"));
+            }
+            let v = b
+                .restitution
+                .as_ref()
+                .ok_or_else(|| missing("restitution", "a coefficient of restitution in (0, 1]"))?;
+            if let Some(e) = effect_off("restitution", v) {
+                return Err(e);
+            }
+            let e = ctx.quantity(v, Dimension::Dimensionless, "bearing.restitution")?;
+            if !(e > 0.0 && e <= 1.0) {
+                return Err(ctx.err(
+                    Some(at(&v.referenced)),
+                    "bearing.restitution",
+                    format!(
+                        "{} is not allowed: a coefficient of restitution in (0, 1]",
+                        v.value
+                    ),
+                ));
+            }
+            DampingModel::Restitution {
+                law,
+                restitution: e,
+            }
+        }
+        other => {
+            if let Some(v) = &b.restitution {
+                return Err(unused("restitution", v, RESTITUTION_LAWS));
+            }
+            if let Some(v) = &b.alpha {
+                return Err(unused("alpha", v, "hunt_crossley_alpha"));
+            }
+            other
+        }
+    };
+    if let (Some(v), DampingModel::HuntCrossleyAlpha { .. } | DampingModel::Restitution { .. }) =
+        (&b.damping, c.bearing.damping_model)
+    {
+        return Err(ctx.err(
+            Some(at(&v.referenced)),
+            "bearing.damping",
+            format!(
+                "damping_model {name} does not use the damping coefficient C; it belongs to \
+                 compression_only and two_sided"
+            ),
+        ));
+    }
+    if matches!(
+        c.bearing.damping_model,
+        DampingModel::HuntCrossleyAlpha { .. } | DampingModel::Restitution { .. }
+    ) {
+        // C belongs to the other laws: 0 in the case and in its file.
+        c.bearing.damping = 0.0;
+    }
+    Ok(())
 }
 
 /// A `waviness:` (race = "") or `inner_/outer_waviness:` section.

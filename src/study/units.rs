@@ -22,6 +22,8 @@ pub enum Dimension {
     Stiffness,
     /// Viscous damping, SI unit N s/m.
     Damping,
+    /// A rate per unit speed (the Hunt–Crossley `α`), SI unit s/m.
+    InverseSpeed,
     /// Time, SI unit s.
     Time,
     /// Frequency, SI unit Hz.
@@ -79,6 +81,7 @@ impl Dimension {
                 ("Ns/m", P(0)),
                 ("kg/s", P(0)),
             ],
+            Dimension::InverseSpeed => &[("s m-1", P(0)), ("s/m", P(0))],
             Dimension::Time => &[
                 ("s", P(0)),
                 ("ms", P(-3)),
