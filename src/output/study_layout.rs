@@ -2,6 +2,7 @@
 
 use crate::output::{provenance, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::metric_specs;
+use crate::signal::replicates::{chaos_specs, replicate_metric_specs, summary_specs};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::CHANNELS;
 use crate::study::params::PARAMETERS;
@@ -126,6 +127,19 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             StudyFingerprint::of(study, None).hex().into(),
         ),
     ]);
+    if let Some(r) = &study.replicates {
+        attributes.extend([
+            ("replicates".to_string(), (r.count as i64).into()),
+            ("replicate_perturbation".to_string(), r.perturbation.into()),
+            ("replicate_seed".to_string(), (r.seed as i64).into()),
+        ]);
+    }
+    if study.chaos_check {
+        attributes.push((
+            "horizon_threshold".to_string(),
+            crate::signal::replicates::HORIZON_THRESHOLD.into(),
+        ));
+    }
     if let Some(d) = &study.design {
         attributes.extend([
             ("design_method".to_string(), d.method.name().into()),
@@ -163,7 +177,15 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
                 )
             })
             .collect(),
-        metrics: metric_specs(),
+        metrics: study_metric_specs(study),
+        replicates: study
+            .replicates
+            .map_or(Vec::new(), |r| (0..r.count as u64).collect()),
+        replicate_metrics: if study.replicates.is_some() {
+            replicate_metric_specs()
+        } else {
+            Vec::new()
+        },
         parameters,
         reference_parameters,
         reference_series: reference_specs(),
@@ -174,6 +196,19 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             deflate_level: study.compression,
         },
     }
+}
+
+/// The `[case]` metrics of a study's file: [`metric_specs`], then with replicates
+/// their [`summary_specs`], then with the chaos check its [`chaos_specs`].
+pub fn study_metric_specs(study: &Study) -> Vec<VarSpec> {
+    let mut specs = metric_specs();
+    if study.replicates.is_some() {
+        specs.extend(summary_specs());
+    }
+    if study.chaos_check {
+        specs.extend(chaos_specs());
+    }
+    specs
 }
 
 /// FNV-1a, 64 bit: the study fingerprint.

@@ -171,7 +171,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         n_series: layout.series.len() as u64,
         n_freq: layout.frequencies.len() as u64,
         n_spectra: layout.spectra.len() as u64,
-        n_metrics: layout.metrics.len() as u64,
+        n_metrics: layout.n_metric_values() as u64,
         storage: layout.storage,
     };
     let reader = match decide_start(study, opts, &header, rows.len(), start)? {
@@ -473,7 +473,7 @@ fn run_pending(
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
                     let reference = &work.references[case.reference];
-                    let result = run_case(work.study, row, &case.params, reference, &mut plan);
+                    let result = run_case(work.study, row, case, reference, &mut plan);
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));
                     tally.case(

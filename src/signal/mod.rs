@@ -3,6 +3,7 @@
 //! case's sampled outputs and the ideal mechanism's.
 
 pub mod metrics;
+pub mod replicates;
 pub mod spectrum;
 
 use std::ops::Range;

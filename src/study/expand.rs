@@ -12,6 +12,7 @@ use super::units::Dimension;
 use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
+mod replicates;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site};
@@ -299,6 +300,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
+    let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
     Ok(Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
@@ -316,6 +318,8 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         cases,
         references,
         design: sampled.map(|d| d.info),
+        replicates,
+        chaos_check,
     })
 }
 
