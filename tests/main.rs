@@ -24,5 +24,6 @@ mod isa;
 mod parity;
 mod properties;
 mod refusals;
+mod replicates;
 mod stiffness;
 mod validation;
