@@ -232,7 +232,7 @@ pub fn simulate(
 }
 
 /// [`simulate`] from the journal-centre eccentricity `e` (m) at `t = 0` instead of
-/// the housing centre: one perturbed replicate of a case (docs/model.md §9.4).
+/// the housing centre: one perturbed replicate of a case (docs/model.md §9.5).
 pub fn simulate_perturbed(
     case: &CaseParams,
     solver: &SolverSettings,

@@ -12,7 +12,8 @@ use std::path::Path;
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
     BearingSection, DesignParameter, DesignSection, GeometrySection, GridFile, HarmonicSection,
-    MechanismSection, OutputSection, SolverSection, SpectraSection, WavinessSection,
+    MechanismSection, OutputSection, ReplicatesSection, SolverSection, SpectraSection,
+    WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -241,6 +242,7 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<OutputSection>("output."));
     expected.extend(keys_of::<DesignSection>("design."));
     expected.extend(keys_of::<DesignParameter>("design.parameters.*."));
+    expected.extend(keys_of::<ReplicatesSection>("replicates."));
     assert!(expected.contains("bearing.waviness.amplitude") && expected.contains("zip"));
 
     let doc = grid_file_doc();

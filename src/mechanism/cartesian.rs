@@ -211,7 +211,7 @@ impl CartesianSliderCrank {
 
     /// Starts the journal at eccentricity `e` (m) from the housing, at the ideal
     /// mechanism's velocities: a replicate's perturbed initial state (docs/model.md
-    /// §9.4). The journal body's independent coordinates are displaced, exactly for
+    /// §9.5). The journal body's independent coordinates are displaced, exactly for
     /// the in-line configuration of `t = 0` (crank angle 0): moving the crank's
     /// centre by `e` moves its journal by `e`; moving the rod's centre by
     /// `(e_x − (l3/2)(1 − cos φ), e_y/2)` turns the rod about the slider pin by

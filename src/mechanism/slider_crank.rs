@@ -334,7 +334,7 @@ pub struct SliderCrank {
     /// Whether the energy ledger's quadratures ride along in the state.
     ledger: bool,
     /// Journal-centre eccentricity at `t = 0` (m); zero but for a study's replicates
-    /// (docs/model.md §9.4).
+    /// (docs/model.md §9.5).
     initial_eccentricity: [f64; 2],
 }
 
@@ -376,7 +376,7 @@ impl SliderCrank {
 
     /// Starts the journal centre at eccentricity `e` (m) instead of the housing
     /// centre, still at rest relative to the housing: a replicate's perturbed initial
-    /// state (docs/model.md §9.4). No effect on the ideal mechanism.
+    /// state (docs/model.md §9.5). No effect on the ideal mechanism.
     #[must_use]
     pub fn with_initial_eccentricity(mut self, e: [f64; 2]) -> Self {
         self.initial_eccentricity = e;

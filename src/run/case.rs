@@ -43,7 +43,7 @@ pub(crate) struct CaseCost {
 /// Simulates `case` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed); with replicates, runs its
 /// perturbed replicates one after the other and adds their metrics, statistics and
-/// predictability horizon (docs/model.md §9.4). Never fails: a failure of the
+/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the
 /// case (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
 /// perturbed replicate only leaves its metrics NaN.
 pub(crate) fn run_case(
@@ -164,7 +164,7 @@ fn run_replicates(
     let base_acceleration = base.channel("slider_acceleration").expect("channel exists");
     // Every replicate parts from replicate 0 while the journal first falls through
     // the clearance and strikes the races: the horizon is searched after the
-    // transient, in the analysed window (docs/model.md §9.4).
+    // transient, in the analysed window (docs/model.md §9.5).
     let window = study.analysis_window();
     let mut horizon = f64::INFINITY;
     for k in 1..count {

@@ -1,4 +1,4 @@
-//! What a case's replicates add to the file (docs/model.md §9.4): each replicated
+//! What a case's replicates add to the file (docs/model.md §9.5): each replicated
 //! metric per replicate, its mean, standard deviation and 95 % interval over the
 //! replicates, and the predictability horizon where the replicates part.
 

@@ -524,6 +524,10 @@ fn check_study_memory(
         cases: total,
         references: references_bound,
         design_values,
+        replicates: file
+            .replicates
+            .as_ref()
+            .map_or(0, |r| r.value.count.value.min(replicates::MAX_REPLICATES)),
     };
     check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
 }

@@ -115,7 +115,7 @@ pub struct Study {
 
 /// A study's `replicates:`: every case runs `count` times, replicate `k ≥ 1` from
 /// the journal centre displaced by `perturbation` in a direction drawn from
-/// `seed`, the case id and `k` (docs/model.md §9.4); replicate 0 is the case itself.
+/// `seed`, the case id and `k` (docs/model.md §9.5); replicate 0 is the case itself.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Replicates {
     /// Runs per case, replicate 0 included (≥ 1).
@@ -218,6 +218,7 @@ impl Study {
                     .design
                     .as_ref()
                     .map_or(0, |d| d.rows * d.parameters.len() as u64),
+                replicates: self.replicates.map_or(0, |r| r.count as u64),
             },
             jobs,
         )
