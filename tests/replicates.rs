@@ -6,8 +6,8 @@
 use std::path::Path;
 
 use studyrun::output::StudyReader;
-use studyrun::signal::replicates::{replicated_metrics, Summary};
 use studyrun::signal::metric_specs;
+use studyrun::signal::replicates::{replicated_metrics, Summary};
 use studyrun::study::Study;
 
 use crate::cli::{assert_same_data, kill_when_journal_passes, studyrun, write};
@@ -60,7 +60,12 @@ fn replicate_zero_is_the_study_without_replicates() {
         assert_eq!(format!("{:?}", p.series), format!("{:?}", r.series));
         assert_eq!(format!("{:?}", p.spectra), format!("{:?}", r.spectra));
         for k in (0..lp.metrics.len()).filter(|&k| k != wall) {
-            assert_eq!(p.metrics[k].to_bits(), r.metrics[k].to_bits(), "{}", lp.metrics[k].name);
+            assert_eq!(
+                p.metrics[k].to_bits(),
+                r.metrics[k].to_bits(),
+                "{}",
+                lp.metrics[k].name
+            );
         }
         for (m, &k) in chosen.iter().enumerate() {
             let values = &r.metrics[n_scalar + 3 * m..n_scalar + 3 * m + 3];
@@ -90,7 +95,10 @@ fn replicates_are_the_same_bits_for_any_jobs_shards_and_resume() {
         let (shard, out) = (format!("{k}/3"), format!("part{k}.h5"));
         ok(d, &["long.yaml", "--shard", &shard, "-o", &out, "-q"]);
     }
-    ok(d, &["merge", "merged.h5", "part2.h5", "part3.h5", "part1.h5"]);
+    ok(
+        d,
+        &["merge", "merged.h5", "part2.h5", "part3.h5", "part1.h5"],
+    );
     assert_same_data(&d.join("one.h5"), &d.join("merged.h5"));
 
     let journal = d.join("long.h5.journal");
@@ -109,7 +117,10 @@ fn replicates_are_the_same_bits_for_any_jobs_shards_and_resume() {
     let n = r.layout().metrics.len();
     let c = r.read_case(0).unwrap();
     let first = &c.metrics[n..n + 3];
-    assert!(first.iter().all(|v| v.is_finite()) && first[1] != first[2], "{first:?}");
+    assert!(
+        first.iter().all(|v| v.is_finite()) && first[1] != first[2],
+        "{first:?}"
+    );
 }
 
 /// Reads metric `name` of row `row` and the `[case, replicate]` values of
@@ -156,13 +167,19 @@ fn a_non_chaotic_case_agrees_and_a_chaotic_one_parts() {
     for v in &values {
         assert!((v - base).abs() < 1e-6 * base, "{values:?}");
     }
-    let (mean, ci) = (metric(&r, 0, &format!("{rms}_mean")).0, metric(&r, 0, &format!("{rms}_ci95")).0);
+    let (mean, ci) = (
+        metric(&r, 0, &format!("{rms}_mean")).0,
+        metric(&r, 0, &format!("{rms}_ci95")).0,
+    );
     assert!(ci < 1e-6 * mean, "interval {ci:e} of mean {mean}");
 
     let (horizon, _) = metric(&r, 1, "predictability_horizon");
     assert!(horizon < 0.5 * duration + 1e-9, "horizon {horizon}");
     assert_eq!(metric(&r, 1, "chaotic").0, 1.0);
-    let (mean, ci) = (metric(&r, 1, &format!("{rms}_mean")).0, metric(&r, 1, &format!("{rms}_ci95")).0);
+    let (mean, ci) = (
+        metric(&r, 1, &format!("{rms}_mean")).0,
+        metric(&r, 1, &format!("{rms}_ci95")).0,
+    );
     assert!(ci > 1e-2 * mean, "interval {ci:e} of mean {mean}");
 }
 
@@ -185,18 +202,32 @@ fn replicate_settings_are_checked() {
     assert_eq!(e, r.eccentricity(5, 1));
     assert_ne!(e, r.eccentricity(6, 1));
     assert_ne!(e, r.eccentricity(5, 2));
-    let off = study("replicates: {count: 2, perturbation: \"1 nm\"}\nchaos_check: false\n").unwrap();
+    let off =
+        study("replicates: {count: 2, perturbation: \"1 nm\"}\nchaos_check: false\n").unwrap();
     assert!(!off.chaos_check);
-    assert!(!study("replicates: {count: 1, perturbation: \"1 nm\"}\n").unwrap().chaos_check);
+    assert!(
+        !study("replicates: {count: 1, perturbation: \"1 nm\"}\n")
+            .unwrap()
+            .chaos_check
+    );
     for (text, needles) in [
         ("chaos_check: true\n", &["chaos_check", "R >= 2"][..]),
         (
             "replicates: {count: 1, perturbation: \"1 nm\"}\nchaos_check: true\n",
             &["chaos_check", "1 run per case"],
         ),
-        ("replicates: {count: 0, perturbation: \"1 nm\"}\n", &["replicates.count", "0 is not allowed", "1 to 1000"]),
-        ("replicates: {count: 2, perturbation: \"0 nm\"}\n", &["replicates.perturbation", "above 0"]),
-        ("replicates: {count: 2, perturbation: \"1 s\"}\n", &["replicates.perturbation"]),
+        (
+            "replicates: {count: 0, perturbation: \"1 nm\"}\n",
+            &["replicates.count", "0 is not allowed", "1 to 1000"],
+        ),
+        (
+            "replicates: {count: 2, perturbation: \"0 nm\"}\n",
+            &["replicates.perturbation", "above 0"],
+        ),
+        (
+            "replicates: {count: 2, perturbation: \"1 s\"}\n",
+            &["replicates.perturbation"],
+        ),
         ("replicates: {count: 2}\n", &["perturbation"]),
     ] {
         let err = study(text).expect_err(text);

@@ -12,8 +12,8 @@ use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
-    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR, STATUS,
-    TIME,
+    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR,
+    STATUS, TIME,
 };
 use super::text::{self, Strings};
 

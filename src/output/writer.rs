@@ -154,7 +154,11 @@ impl Scalars {
                     .map(|m| (m, n_replicates)),
             )
             .map(|((ds, spec), width)| {
-                Ok((ds.clone(), ds.read_raw::<f64>().at(path, &spec.name)?, width))
+                Ok((
+                    ds.clone(),
+                    ds.read_raw::<f64>().at(path, &spec.name)?,
+                    width,
+                ))
             })
             .collect::<Result<_, StudyFileError>>()?;
         let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
@@ -174,8 +178,7 @@ impl Scalars {
         if !metrics.is_empty() {
             let mut at = 0;
             for (_, column, width) in &mut self.metrics {
-                column[row * *width..(row + 1) * *width]
-                    .copy_from_slice(&metrics[at..at + *width]);
+                column[row * *width..(row + 1) * *width].copy_from_slice(&metrics[at..at + *width]);
                 at += *width;
             }
         }
@@ -638,9 +641,8 @@ impl Creator<'_> {
     fn coordinates(&self) -> Result<[Dataset; 4], StudyFileError> {
         let l = self.layout;
         let [case, time, frequency, reference] = COORDINATES;
-        let meta = |(_, units, long_name): (&'static str, &'static str, &'static str)| {
-            (units, long_name)
-        };
+        let meta =
+            |(_, units, long_name): (&'static str, &'static str, &'static str)| (units, long_name);
         Ok([
             self.coordinate(CASE, &ids32(&l.case_ids), meta(case), 0)?,
             self.coordinate(TIME, &l.times, meta(time), 1)?,

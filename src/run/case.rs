@@ -2,10 +2,10 @@
 
 use super::stats::thread_cpu;
 use crate::mechanism::{CaseParams, Location};
-use crate::output::Status;
-use crate::signal::spectrum::SpectrumPlan;
 use crate::output::study_metric_specs;
+use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
+use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis};
 use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
 use crate::study::{Case, Replicates, Study};
@@ -197,7 +197,11 @@ fn run_replicates(
     ReplicateResults {
         values,
         summaries,
-        horizon: if horizon.is_finite() { horizon } else { f64::NAN },
+        horizon: if horizon.is_finite() {
+            horizon
+        } else {
+            f64::NAN
+        },
     }
 }
 

@@ -32,7 +32,10 @@ pub fn replicate_metric_specs() -> Vec<VarSpec> {
             VarSpec::new(
                 format!("{}_replicates", s.name),
                 s.units.clone(),
-                format!("{} of each replicate (replicate 0: the case unperturbed)", s.long_name),
+                format!(
+                    "{} of each replicate (replicate 0: the case unperturbed)",
+                    s.long_name
+                ),
             )
         })
         .collect()
@@ -55,7 +58,10 @@ pub fn summary_specs() -> Vec<VarSpec> {
                 VarSpec::new(
                     format!("{}_std", s.name),
                     s.units.clone(),
-                    format!("sample standard deviation over the replicates of {}", s.long_name),
+                    format!(
+                        "sample standard deviation over the replicates of {}",
+                        s.long_name
+                    ),
                 ),
                 VarSpec::new(
                     format!("{}_ci95", s.name),
