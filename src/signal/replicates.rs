@@ -191,7 +191,7 @@ pub fn predictability_horizon(base: &[f64], other: &[f64], times: &[f64], durati
     base.iter()
         .zip(other)
         .zip(times)
-        .find(|((a, b), _)| !((*a - *b).abs() <= limit))
+        .find(|((a, b), _)| (*a - *b).abs() > limit || (*a - *b).is_nan())
         .map_or(duration, |(_, t)| *t)
 }
 
