@@ -43,6 +43,13 @@ fn replicate_zero_is_the_study_without_replicates() {
     );
     ok(d, &["plain.yaml", "-o", "plain.h5", "-q"]);
     ok(d, &["repl.yaml", "-o", "repl.h5", "-q"]);
+    let summary = studyrun::output::inspect(&d.join("repl.h5")).unwrap();
+    assert!(
+        summary.contains(
+            "replicates: 3 per case, perturbation 0.000000001 m, seed 7; predictability_horizon"
+        ),
+        "{summary}"
+    );
     let (plain, repl) = (
         StudyReader::open(d.join("plain.h5")).unwrap(),
         StudyReader::open(d.join("repl.h5")).unwrap(),
