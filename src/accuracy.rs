@@ -23,13 +23,12 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::signal::metrics::{vibration_metrics, VibrationMetrics};
+use crate::signal::replicates::predictability_horizon;
 use crate::simulate::{simulate, CaseOutput};
 use crate::solve::{Method, SolverSettings};
 use crate::study::Study;
 
-/// Relative separation (of the slider acceleration's range) that ends the
-/// predictability horizon.
-pub const HORIZON_THRESHOLD: f64 = 1e-3;
+pub use crate::signal::replicates::HORIZON_THRESHOLD;
 
 /// Channels whose errors are measured, in order.
 pub const ERROR_CHANNELS: [&str; 3] = ["slider_acceleration", "crank_moment", "bearing_force"];
@@ -208,13 +207,7 @@ pub fn reference(
         reference.channel("slider_acceleration").expect("channel"),
         check.channel("slider_acceleration").expect("channel"),
     );
-    let scale = range(a);
-    let horizon = a
-        .iter()
-        .zip(b)
-        .zip(&reference.times)
-        .find(|((x, y), _)| (*x - *y).abs() > HORIZON_THRESHOLD * scale)
-        .map_or(study.sampling.duration, |(_, t)| *t);
+    let horizon = predictability_horizon(a, b, &reference.times, study.sampling.duration);
     let (cr, cc) = (channels(&reference, &m_ref), channels(&check, &m_chk));
     let metric_uncertainty = [0, 1, 2].map(|c| relative(cc[c].1, cr[c].1));
     Ok(CaseReference {
@@ -482,6 +475,8 @@ pub fn write_file(
         spectra: Vec::new(),
         metrics,
         parameters,
+        replicates: Vec::new(),
+        replicate_metrics: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
         reference_index: vec![0; ms.len()],

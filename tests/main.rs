@@ -27,6 +27,7 @@ mod isa;
 mod parity;
 mod properties;
 mod refusals;
+mod replicates;
 mod stiffness;
 mod validation;
 mod variable_speed;

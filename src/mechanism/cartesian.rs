@@ -202,9 +202,38 @@ impl CartesianSliderCrank {
     }
 
     /// The integrator's initial state: the independent coordinates and their rates
-    /// from the ideal mechanism (zero eccentricity), plus the ledger if on.
+    /// from the ideal mechanism (zero eccentricity, unless
+    /// [`CartesianSliderCrank::with_initial_eccentricity`] moved the journal), plus
+    /// the ledger if on.
     pub fn initial_state(&mut self) -> Vec<f64> {
         self.system.initial_state(&self.q0, &self.qd0)
+    }
+
+    /// Starts the journal at eccentricity `e` (m) from the housing, at the ideal
+    /// mechanism's velocities: a replicate's perturbed initial state (docs/model.md
+    /// §9.5). The journal body's independent coordinates are displaced, exactly for
+    /// the in-line configuration of `t = 0` (crank angle 0): moving the crank's
+    /// centre by `e` moves its journal by `e`; moving the rod's centre by
+    /// `(e_x − (l3/2)(1 − cos φ), e_y/2)` turns the rod about the slider pin by
+    /// `sin φ = −e_y/l3` and moves its journal by `e`. The independent rates stay
+    /// the ideal mechanism's: the crank's journal starts at rest relative to the
+    /// housing, the rod's with a relative velocity of order `|e| ω`. No effect on
+    /// the ideal mechanism.
+    #[must_use]
+    pub fn with_initial_eccentricity(mut self, e: [f64; 2]) -> Self {
+        let (x, shift) = match self.location {
+            Location::Ideal => return self,
+            Location::CrankGround => (0, e),
+            Location::CrankRod => {
+                // Slider pin minus rod centre: l3/2 in line.
+                let half = self.q0[6] - self.q0[3];
+                let cos = (1.0 - (0.5 * e[1] / half).powi(2)).sqrt();
+                (3, [e[0] - half * (1.0 - cos), 0.5 * e[1]])
+            }
+        };
+        self.q0[x] += shift[0];
+        self.q0[x + 1] += shift[1];
+        self
     }
 
     /// The underlying multibody system (the ODE the integrators advance).

@@ -362,6 +362,9 @@ pub struct SliderCrank {
     isa: Isa,
     /// Whether the energy ledger's quadratures ride along in the state.
     ledger: bool,
+    /// Journal-centre eccentricity at `t = 0` (m); zero but for a study's replicates
+    /// (docs/model.md §9.5).
+    initial_eccentricity: [f64; 2],
 }
 
 impl SliderCrank {
@@ -402,7 +405,17 @@ impl SliderCrank {
             bearing,
             isa: Isa::detect(),
             ledger: false,
+            initial_eccentricity: [0.0; 2],
         })
+    }
+
+    /// Starts the journal centre at eccentricity `e` (m) instead of the housing
+    /// centre, still at rest relative to the housing: a replicate's perturbed initial
+    /// state (docs/model.md §9.5). No effect on the ideal mechanism.
+    #[must_use]
+    pub fn with_initial_eccentricity(mut self, e: [f64; 2]) -> Self {
+        self.initial_eccentricity = e;
+        self
     }
 
     /// Turns the energy ledger on or off (docs/model.md §3.8): with it, a bearing
@@ -551,10 +564,15 @@ impl SliderCrank {
         self.location
     }
 
-    /// The initial state: centred journal at rest relative to the housing (paper
-    /// Table 3), `(0, 0, 0, 0)`; empty for the ideal mechanism.
+    /// The initial state: journal at rest relative to the housing, centred (paper
+    /// Table 3), `(0, 0, 0, 0)`, unless [`SliderCrank::with_initial_eccentricity`]
+    /// moved it; empty for the ideal mechanism.
     pub fn initial_state(&self) -> Vec<f64> {
-        vec![0.0; self.dim()]
+        let mut y = vec![0.0; self.dim()];
+        if let Some(e) = y.get_mut(..2) {
+            e.copy_from_slice(&self.initial_eccentricity);
+        }
+        y
     }
 
     /// The crank's motion at `t` (s): `θ2 = ω t` at constant speed, else the drive's.

@@ -58,6 +58,20 @@ pub fn inspect(path: &Path) -> Result<String> {
         count(Status::Failed),
         count(Status::Pending)
     )?;
+    if !l.replicates.is_empty() {
+        writeln!(
+            out,
+            "replicates: {} per case, perturbation {} m, seed {}{}",
+            l.replicates.len(),
+            attr("replicate_perturbation"),
+            attr("replicate_seed"),
+            if l.metrics.iter().any(|m| m.name == "chaotic") {
+                "; predictability_horizon and chaotic per case"
+            } else {
+                ""
+            }
+        )?;
+    }
     let failed: Vec<usize> = (0..statuses.len())
         .filter(|&k| statuses[k] == Status::Failed)
         .collect();

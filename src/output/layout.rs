@@ -13,6 +13,9 @@ pub const TIME: &str = "time";
 pub const FREQUENCY: &str = "frequency";
 /// Name of the reference dimension and its coordinate variable (reference ids, int32).
 pub const REFERENCE: &str = "reference";
+/// Name of the replicate dimension and its coordinate variable (replicate ids,
+/// int32), present only in a file with [`Layout::replicate_metrics`].
+pub const REPLICATE: &str = "replicate";
 /// Built-in variable `[case]` i8: the [`Status`] code of each case.
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
@@ -28,11 +31,12 @@ pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
 pub(super) const FORMAT_VERSION: i64 = 1;
 
 /// The names no caller variable may take.
-const RESERVED: [&str; 7] = [
+const RESERVED: [&str; 8] = [
     CASE,
     TIME,
     FREQUENCY,
     REFERENCE,
+    REPLICATE,
     STATUS,
     ERROR_MESSAGE,
     REFERENCE_INDEX,
@@ -222,6 +226,7 @@ impl Status {
 pub(super) enum Role {
     Parameter,
     Metric,
+    ReplicateMetric,
     Series,
     Spectrum,
     ReferenceParameter,
@@ -229,9 +234,10 @@ pub(super) enum Role {
 }
 
 impl Role {
-    const ALL: [Self; 6] = [
+    const ALL: [Self; 7] = [
         Self::Parameter,
         Self::Metric,
+        Self::ReplicateMetric,
         Self::Series,
         Self::Spectrum,
         Self::ReferenceParameter,
@@ -243,6 +249,7 @@ impl Role {
         match self {
             Self::Parameter => "parameter",
             Self::Metric => "metric",
+            Self::ReplicateMetric => "replicate_metric",
             Self::Series => "series",
             Self::Spectrum => "spectrum",
             Self::ReferenceParameter => "reference_parameter",
@@ -279,6 +286,12 @@ pub struct Layout {
     pub spectra: Vec<VarSpec>,
     /// Per-case scalar results `[case]`, float64.
     pub metrics: Vec<VarSpec>,
+    /// Replicate ids (the `replicate` coordinate, distinct, up to [`MAX_ID`]); empty
+    /// when the file has no replicate dimension.
+    pub replicates: Vec<u64>,
+    /// Per-case, per-replicate results `[case, replicate]`, float64; none without
+    /// `replicates`.
+    pub replicate_metrics: Vec<VarSpec>,
     /// Per-case inputs `[case]`, written at creation.
     pub parameters: Vec<Param>,
     /// Per-reference inputs `[reference]`, written at creation.
@@ -377,6 +390,12 @@ impl Layout {
         self.reference_ids.len()
     }
 
+    /// Number of metric values a case record holds: one per [`Layout::metrics`],
+    /// then one per replicate for each of [`Layout::replicate_metrics`].
+    pub fn n_metric_values(&self) -> usize {
+        self.metrics.len() + self.replicate_metrics.len() * self.replicates.len()
+    }
+
     /// Checks the layout; the error says what is wrong and names the variable.
     pub fn validate(&self) -> Result<(), String> {
         let n_case = self.case_ids.len();
@@ -386,6 +405,13 @@ impl Layout {
         }
         distinct(CASE, &self.case_ids)?;
         distinct(REFERENCE, &self.reference_ids)?;
+        distinct(REPLICATE, &self.replicates)?;
+        if self.replicates.is_empty() && !self.replicate_metrics.is_empty() {
+            return Err(format!(
+                "`{}` needs the `{REPLICATE}` dimension, which is empty",
+                self.replicate_metrics[0].name
+            ));
+        }
         if self.storage.deflate_level > 9 {
             return Err(format!(
                 "deflate level {} is not in 0..=9",
@@ -454,6 +480,7 @@ impl Layout {
             .iter()
             .map(|p| &p.spec)
             .chain(&self.metrics)
+            .chain(&self.replicate_metrics)
             .chain(&self.series)
             .chain(&self.spectra)
             .chain(self.reference_parameters.iter().map(|p| &p.spec))
@@ -536,6 +563,8 @@ mod tests {
             series: vec![VarSpec::new("x", "m", "position")],
             spectra: vec![VarSpec::new("x_spectrum", "m", "amplitude of x")],
             metrics: vec![VarSpec::new("x_rms", "m", "rms of x")],
+            replicates: vec![],
+            replicate_metrics: vec![],
             parameters: vec![Param {
                 spec: VarSpec::new("rpm", "min-1", "crank speed"),
                 values: ParamValues::F64(vec![300.0, 600.0]),
@@ -556,7 +585,7 @@ mod tests {
     #[test]
     fn inconsistent_layouts_are_refused_by_name() {
         type Edit = fn(&mut Layout);
-        let cases: [(Edit, &str); 10] = [
+        let cases: [(Edit, &str); 11] = [
             (|l| l.case_ids = vec![1, 1], "`case` id 1"),
             (
                 |l| l.case_ids = vec![1, 1 << 31],
@@ -577,6 +606,10 @@ mod tests {
             (|l| l.metrics[0].name = "status".into(), "`status`"),
             (|l| l.series[0].name = "a/b".into(), "\"a/b\""),
             (|l| l.storage.deflate_level = 10, "deflate level 10"),
+            (
+                |l| l.replicate_metrics = vec![VarSpec::new("x_reps", "m", "x")],
+                "`x_reps` needs the `replicate` dimension",
+            ),
             (|l| l.times.clear(), "`time` is empty"),
             (
                 |l| l.attributes.push(("created".into(), 1.0.into())),

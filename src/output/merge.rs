@@ -121,6 +121,8 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 && same_variables(&l.series, &first.series)
                 && same_variables(&l.spectra, &first.spectra)
                 && same_variables(&l.metrics, &first.metrics)
+                && same_variables(&l.replicate_metrics, &first.replicate_metrics)
+                && l.replicates == first.replicates
                 && same_variables(params(l), params(first))
                 && l.reference_ids == first.reference_ids,
             || {
@@ -174,6 +176,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         series: Vec<usize>,
         spectra: Vec<usize>,
         metrics: Vec<usize>,
+        replicate_metrics: Vec<usize>,
         parameters: Vec<usize>,
     }
     let shard_order: Vec<Order> = readers
@@ -186,6 +189,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 series: positions(&first.series, &l.series),
                 spectra: positions(&first.spectra, &l.spectra),
                 metrics: positions(&first.metrics, &l.metrics),
+                replicate_metrics: positions(&first.replicate_metrics, &l.replicate_metrics),
                 parameters: positions(&want, &have),
             }
         })
@@ -263,7 +267,12 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         let o = &shard_order[s];
         let series: Vec<&[f64]> = o.series.iter().map(|&i| c.series[i].as_slice()).collect();
         let spectra: Vec<&[f64]> = o.spectra.iter().map(|&i| c.spectra[i].as_slice()).collect();
-        let metrics: Vec<f64> = o.metrics.iter().map(|&i| c.metrics[i]).collect();
+        let mut metrics: Vec<f64> = o.metrics.iter().map(|&i| c.metrics[i]).collect();
+        let (n_scalar, n_rep) = (o.metrics.len(), layout.replicates.len());
+        for &i in &o.replicate_metrics {
+            let at = n_scalar + i * n_rep;
+            metrics.extend_from_slice(&c.metrics[at..at + n_rep]);
+        }
         writer
             .write_case(
                 row,

@@ -85,13 +85,15 @@ pub use error::StudyFileError;
 pub use inspect::inspect;
 pub use layout::{
     command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
-    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, STATUS, TIME,
+    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, REPLICATE, STATUS,
+    TIME,
 };
 pub use lock::OutputLock;
 pub use merge::merge;
 pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
 pub use reader::{CaseData, StudyReader};
 pub use study_layout::{
-    fnv1a, study_layout, StudyFingerprint, MODEL_CONVENTIONS, REFERENCE_CHANNELS,
+    fnv1a, study_layout, study_metric_specs, StudyFingerprint, MODEL_CONVENTIONS,
+    REFERENCE_CHANNELS,
 };
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

@@ -12,7 +12,8 @@ use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
-    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
+    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR,
+    STATUS, TIME,
 };
 use super::text::{self, Strings};
 
@@ -24,7 +25,8 @@ pub struct CaseData {
     pub series: Vec<Vec<f64>>,
     /// One vector per [`Layout::spectra`], `frequencies.len()` values each.
     pub spectra: Vec<Vec<f64>>,
-    /// One value per [`Layout::metrics`].
+    /// One value per [`Layout::metrics`], then, per [`Layout::replicate_metrics`],
+    /// one per replicate (as [`Record::metrics`](super::Record::metrics)).
     pub metrics: Vec<f64>,
     /// The case's state.
     pub status: Status,
@@ -132,13 +134,19 @@ impl StudyReader {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
         let series = self.read_rows(&self.rows.series, &self.layout.series, row)?;
         let spectra = self.read_rows(&self.rows.spectra, &self.layout.spectra, row)?;
-        let metrics = self
+        let mut metrics: Vec<f64> = self
             .rows
             .metrics
             .iter()
             .zip(&self.layout.metrics)
             .map(|(ds, spec)| read_one::<f64>(ds, row).at(&self.path, &spec.name))
             .collect::<Result<_, _>>()?;
+        let replicates = self.read_rows(
+            &self.rows.replicate_metrics,
+            &self.layout.replicate_metrics,
+            row,
+        )?;
+        metrics.extend(replicates.into_iter().flatten());
         let message = self.messages[row].clone();
         let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
         Ok(CaseData {
@@ -295,6 +303,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         series: Vec::new(),
         spectra: Vec::new(),
         metrics: Vec::new(),
+        replicates: match file.dataset(REPLICATE) {
+            Ok(_) => read_ids(file, REPLICATE, path)?,
+            Err(_) => Vec::new(),
+        },
+        replicate_metrics: Vec::new(),
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
@@ -327,6 +340,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         };
         let (rows, cols) = match role {
             Role::Parameter | Role::Metric => (layout.n_cases(), None),
+            Role::ReplicateMetric => (layout.n_cases(), Some(layout.replicates.len())),
             Role::Series => (layout.n_cases(), Some(layout.times.len())),
             Role::Spectrum => (layout.n_cases(), Some(layout.frequencies.len())),
             Role::ReferenceParameter => (layout.n_references(), None),
@@ -345,11 +359,12 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
                 .reference_parameters
                 .push(read_param(&ds, spec, path)?),
             Role::Metric => layout.metrics.push(spec),
+            Role::ReplicateMetric => layout.replicate_metrics.push(spec),
             Role::Series => layout.series.push(spec),
             Role::Spectrum => layout.spectra.push(spec),
             Role::ReferenceSeries => layout.reference_series.push(spec),
         }
-        if cols.is_some() && storage_from.is_none() {
+        if cols.is_some() && role != Role::ReplicateMetric && storage_from.is_none() {
             storage_from = Some(ds);
         }
     }

@@ -4,6 +4,7 @@ use crate::bearing::fault_label;
 use crate::mechanism::CaseParams;
 use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
+use crate::signal::replicates::{chaos_specs, replicate_metric_specs, summary_specs};
 use crate::signal::spectrum::frequencies;
 use crate::signal::{envelope_spectrum_specs, metric_specs};
 use crate::simulate::CHANNELS;
@@ -188,6 +189,19 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             StudyFingerprint::of(study, None).hex().into(),
         ),
     ]);
+    if let Some(r) = &study.replicates {
+        attributes.extend([
+            ("replicates".to_string(), (r.count as i64).into()),
+            ("replicate_perturbation".to_string(), r.perturbation.into()),
+            ("replicate_seed".to_string(), (r.seed as i64).into()),
+        ]);
+    }
+    if study.chaos_check {
+        attributes.push((
+            "horizon_threshold".to_string(),
+            crate::signal::replicates::HORIZON_THRESHOLD.into(),
+        ));
+    }
     if let Some(d) = &study.design {
         attributes.extend([
             ("design_method".to_string(), d.method.name().into()),
@@ -229,7 +243,15 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             })
             .chain(study.envelope.iter().flat_map(envelope_spectrum_specs))
             .collect(),
-        metrics: metric_specs(study.envelope.as_ref()),
+        metrics: study_metric_specs(study),
+        replicates: study
+            .replicates
+            .map_or(Vec::new(), |r| (0..r.count as u64).collect()),
+        replicate_metrics: if study.replicates.is_some() {
+            replicate_metric_specs()
+        } else {
+            Vec::new()
+        },
         parameters,
         reference_parameters,
         reference_series: reference_specs(),
@@ -259,6 +281,19 @@ fn envelope_attributes(envelope: &EnvelopeSettings, n: usize) -> Vec<(String, At
         ("stft_segment".to_string(), (segment as i64).into()),
         ("stft_hop".to_string(), ((segment / 2) as i64).into()),
     ]
+}
+
+/// The `[case]` metrics of a study's file: [`metric_specs`], then with replicates
+/// their [`summary_specs`], then with the chaos check its [`chaos_specs`].
+pub fn study_metric_specs(study: &Study) -> Vec<VarSpec> {
+    let mut specs = metric_specs(study.envelope.as_ref());
+    if study.replicates.is_some() {
+        specs.extend(summary_specs());
+    }
+    if study.chaos_check {
+        specs.extend(chaos_specs());
+    }
+    specs
 }
 
 /// FNV-1a, 64 bit: the study fingerprint.

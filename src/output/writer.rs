@@ -15,7 +15,7 @@ use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
-    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, ROLE_ATTR, STATUS, TIME,
+    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR, STATUS, TIME,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
@@ -35,7 +35,9 @@ pub struct Record<'a, Row: ?Sized> {
     pub series: &'a [&'a Row],
     /// One row per [`Layout::spectra`], `frequencies.len()` values each.
     pub spectra: &'a [&'a Row],
-    /// One value per [`Layout::metrics`].
+    /// One value per [`Layout::metrics`], then, per
+    /// [`Layout::replicate_metrics`], one per replicate
+    /// ([`Layout::n_metric_values`] in all).
     pub metrics: &'a [f64],
     /// The case's state.
     pub status: Status,
@@ -123,11 +125,13 @@ pub struct StudyWriter {
 /// entries: their size on disk).
 const METADATA_CACHE_BYTES: usize = 512 * 1024;
 
-/// The `[case]` scalars of every row, written whole by [`Scalars::write`].
+/// The `[case]` scalars and `[case, replicate]` metrics of every row, written whole
+/// by [`Scalars::write`].
 struct Scalars {
     path: PathBuf,
-    /// Per metric: its dataset and one value per case.
-    metrics: Vec<(Dataset, Vec<f64>)>,
+    /// Per metric, then per replicate metric: its dataset, its values in row-major
+    /// order, and the values per case (1, or the number of replicates).
+    metrics: Vec<(Dataset, Vec<f64>, usize)>,
     status: (Dataset, Vec<i8>),
     messages: (Dataset, Vec<String>),
     /// Something changed since the last write.
@@ -137,11 +141,25 @@ struct Scalars {
 impl Scalars {
     /// The scalars as the file holds them now (NaN, pending and empty in a new file).
     fn read(rows: &RowDatasets, layout: &Layout, path: &Path) -> Result<Self, StudyFileError> {
+        let n_replicates = layout.replicates.len();
         let metrics = rows
             .metrics
             .iter()
             .zip(&layout.metrics)
-            .map(|(ds, spec)| Ok((ds.clone(), ds.read_raw::<f64>().at(path, &spec.name)?)))
+            .map(|m| (m, 1))
+            .chain(
+                rows.replicate_metrics
+                    .iter()
+                    .zip(&layout.replicate_metrics)
+                    .map(|m| (m, n_replicates)),
+            )
+            .map(|((ds, spec), width)| {
+                Ok((
+                    ds.clone(),
+                    ds.read_raw::<f64>().at(path, &spec.name)?,
+                    width,
+                ))
+            })
             .collect::<Result<_, StudyFileError>>()?;
         let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
         let messages = read_messages(&rows.error_message, layout.n_cases(), path)?;
@@ -154,10 +172,15 @@ impl Scalars {
         })
     }
 
-    /// Records row `row`'s metrics (if any), status and message.
+    /// Records row `row`'s metrics (if any, laid out as [`Record::metrics`]),
+    /// status and message.
     fn set(&mut self, row: usize, metrics: &[f64], status: Status, message: &str) {
-        for ((_, column), value) in self.metrics.iter_mut().zip(metrics) {
-            column[row] = *value;
+        if !metrics.is_empty() {
+            let mut at = 0;
+            for (_, column, width) in &mut self.metrics {
+                column[row * *width..(row + 1) * *width].copy_from_slice(&metrics[at..at + *width]);
+                at += *width;
+            }
         }
         self.status.1[row] = status.code();
         self.messages.1[row] = message.replace('\0', "\u{FFFD}");
@@ -170,7 +193,7 @@ impl Scalars {
             return Ok(());
         }
         let path = &self.path;
-        for (ds, values) in &self.metrics {
+        for (ds, values, _) in &self.metrics {
             ds.write_raw(values).at(path, &ds.name())?;
         }
         let messages = self
@@ -368,13 +391,16 @@ impl StudyWriter {
         let n_freq = self.layout.frequencies.len();
         self.check_rows("series", &self.layout.series, record.series, n_time)?;
         self.check_rows("spectra", &self.layout.spectra, record.spectra, n_freq)?;
-        if !record.metrics.is_empty() && record.metrics.len() != self.layout.metrics.len() {
+        let n_values = self.layout.n_metric_values();
+        if !record.metrics.is_empty() && record.metrics.len() != n_values {
             return Err(self.record_error(
                 "metrics",
                 format!(
-                    "{} values for {} metrics",
+                    "{} values for {} metrics and {} replicate metrics x {} replicates",
                     record.metrics.len(),
-                    self.layout.metrics.len()
+                    self.layout.metrics.len(),
+                    self.layout.replicate_metrics.len(),
+                    self.layout.replicates.len(),
                 ),
             ));
         }
@@ -574,6 +600,26 @@ impl Creator<'_> {
             self.finish_var(&ds, spec, Some(Role::Metric), &[&case])?;
             fill_attr(&ds, false).at(self.path, &spec.name)?;
         }
+        if !l.replicates.is_empty() {
+            let replicate = self.coordinate(
+                REPLICATE,
+                &ids32(&l.replicates),
+                ("1", "replicate id (0: the case unperturbed)"),
+                COORDINATES.len(),
+            )?;
+            for spec in &l.replicate_metrics {
+                // Contiguous: written whole, like the `[case]` metrics.
+                let ds = self
+                    .file
+                    .new_dataset::<f64>()
+                    .fill_value(f64::NAN)
+                    .shape([l.n_cases(), l.replicates.len()])
+                    .create(spec.name.as_str())
+                    .at(self.path, &spec.name)?;
+                self.finish_var(&ds, spec, Some(Role::ReplicateMetric), &[&case, &replicate])?;
+                fill_attr(&ds, false).at(self.path, &spec.name)?;
+            }
+        }
         for (specs, role, dim) in [
             (&l.series, Role::Series, &time),
             (&l.spectra, Role::Spectrum, &frequency),
@@ -594,28 +640,40 @@ impl Creator<'_> {
     /// Writes the four coordinate variables and makes them dimension scales.
     fn coordinates(&self) -> Result<[Dataset; 4], StudyFileError> {
         let l = self.layout;
-        let datasets = [
-            self.with_data(CASE, &ids32(&l.case_ids))?,
-            self.with_data(TIME, &l.times)?,
-            self.with_data(FREQUENCY, &l.frequencies)?,
-            self.with_data(REFERENCE, &ids32(&l.reference_ids))?,
-        ];
-        for (dimid, (ds, (name, units, long_name))) in datasets.iter().zip(COORDINATES).enumerate()
-        {
-            set_scale(ds, name).map_err(|source| StudyFileError::Scale {
-                path: self.path.to_owned(),
-                variable: name.to_owned(),
-                source,
-            })?;
-            attributes::write_str(ds, "units", units).at(self.path, name)?;
-            attributes::write_str(ds, "long_name", long_name).at(self.path, name)?;
-            // netCDF-C's dimension id, kept in file order like netCDF-C writes it.
-            ds.new_attr::<i32>()
-                .create("_Netcdf4Dimid")
-                .and_then(|a| a.write_scalar(&(dimid as i32)))
-                .at(self.path, name)?;
-        }
-        Ok(datasets)
+        let [case, time, frequency, reference] = COORDINATES;
+        let meta =
+            |(_, units, long_name): (&'static str, &'static str, &'static str)| (units, long_name);
+        Ok([
+            self.coordinate(CASE, &ids32(&l.case_ids), meta(case), 0)?,
+            self.coordinate(TIME, &l.times, meta(time), 1)?,
+            self.coordinate(FREQUENCY, &l.frequencies, meta(frequency), 2)?,
+            self.coordinate(REFERENCE, &ids32(&l.reference_ids), meta(reference), 3)?,
+        ])
+    }
+
+    /// A coordinate variable `name` holding `values`, with `(units, long_name)`,
+    /// made a dimension scale with netCDF-C's dimension id `dimid`.
+    fn coordinate<T: H5Type>(
+        &self,
+        name: &str,
+        values: &[T],
+        (units, long_name): (&str, &str),
+        dimid: usize,
+    ) -> Result<Dataset, StudyFileError> {
+        let ds = self.with_data(name, values)?;
+        set_scale(&ds, name).map_err(|source| StudyFileError::Scale {
+            path: self.path.to_owned(),
+            variable: name.to_owned(),
+            source,
+        })?;
+        attributes::write_str(&ds, "units", units).at(self.path, name)?;
+        attributes::write_str(&ds, "long_name", long_name).at(self.path, name)?;
+        // netCDF-C's dimension id, kept in file order like netCDF-C writes it.
+        ds.new_attr::<i32>()
+            .create("_Netcdf4Dimid")
+            .and_then(|a| a.write_scalar(&(dimid as i32)))
+            .at(self.path, name)?;
+        Ok(ds)
     }
 
     /// A `[dim]` parameter with its values.

@@ -2,11 +2,13 @@
 
 use super::stats::thread_cpu;
 use crate::mechanism::{CaseParams, Location};
+use crate::output::study_metric_specs;
 use crate::output::Status;
+use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
-use crate::simulate::{simulate, CaseOutput};
-use crate::study::Study;
+use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
+use crate::study::{Case, Replicates, Study};
 
 /// What one case contributes to the file, owned so it can cross threads.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,7 +23,9 @@ pub(crate) struct CaseResult {
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
-    /// One value per [`metric_specs`] entry (NaN where unknown).
+    /// One value per [`study_metric_specs`] entry, then per [`replicated_metrics`]
+    /// entry one per replicate (NaN where unknown): the file's
+    /// [`Record::metrics`](crate::output::Record::metrics).
     pub metrics: Vec<f64>,
     /// What computing the case cost (not stored in the file or the journal).
     pub cost: CaseCost,
@@ -36,14 +40,17 @@ pub(crate) struct CaseCost {
     pub analysis: f64,
 }
 
-/// Simulates `params` at file row `row` and derives spectra and metrics against
+/// Simulates `case` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed), and the envelope analysis
-/// when the study has one (`envelope`, planned for it). Never fails: a failure
-/// becomes a [`Status::Failed`] result with its message.
+/// when the study has one (`envelope`, planned for it); with replicates, runs its
+/// perturbed replicates one after the other and adds their metrics, statistics and
+/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the
+/// case (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
+/// perturbed replicate only leaves its metrics NaN.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
-    params: &CaseParams,
+    case: &Case,
     reference: &CaseOutput,
     plan: &mut SpectrumPlan,
     envelope: Option<&mut EnvelopeAnalysis>,
@@ -51,15 +58,18 @@ pub(crate) fn run_case(
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
     let n_metrics = metric_specs(study.envelope.as_ref()).len();
+    let n_values = study_metric_specs(study).len()
+        + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len();
+    let params = &case.params;
     let simulated = simulate(params, &study.solver, &study.sampling);
     let cpu_simulated = thread_cpu();
     let mut cost = CaseCost {
         simulate: cpu_simulated - cpu_start,
         analysis: 0.0,
     };
-    // A failure keeps no series; its metrics are NaN but for the wall time (last).
+    // A failure keeps no series; its metrics are NaN but for the wall time.
     let failed = |message: String, cost: CaseCost| {
-        let mut metrics = vec![f64::NAN; n_metrics];
+        let mut metrics = vec![f64::NAN; n_values];
         metrics[n_metrics - 1] = start.elapsed().as_secs_f64();
         CaseResult {
             row,
@@ -94,8 +104,24 @@ pub(crate) fn run_case(
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
     };
-    metrics.push(start.elapsed().as_secs_f64());
     cost.analysis = thread_cpu() - cpu_simulated;
+    let replicates = study
+        .replicates
+        .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
+    metrics.push(start.elapsed().as_secs_f64());
+    if let Some(r) = replicates {
+        metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
+        if study.chaos_check {
+            let chaotic = if r.horizon.is_nan() {
+                f64::NAN
+            } else {
+                f64::from(u8::from(r.horizon < study.sampling.duration))
+            };
+            metrics.extend([r.horizon, chaotic]);
+        }
+        metrics.extend(r.values);
+    }
+    debug_assert_eq!(metrics.len(), n_values);
     CaseResult {
         row,
         status: Status::Ok,
@@ -104,6 +130,90 @@ pub(crate) fn run_case(
         spectra,
         metrics,
         cost,
+    }
+}
+
+/// What a case's replicates add to its record.
+struct ReplicateResults {
+    /// Per [`replicated_metrics`] entry, its value for each replicate, replicate 0 first.
+    values: Vec<f64>,
+    /// Per [`replicated_metrics`] entry, its statistics over the replicates.
+    summaries: Vec<Summary>,
+    /// The earliest predictability horizon of the perturbed replicates against
+    /// replicate 0 in the analysed window (s); the duration if none parts, NaN if
+    /// none ran.
+    horizon: f64,
+}
+
+/// Runs replicates `1..count` of `case` (replicate 0 is `base`, whose metrics but
+/// the wall time are `base_metrics`) and collects their metrics and horizon. The
+/// cost of simulating and analysing them is added to `cost`.
+#[allow(clippy::too_many_arguments)]
+fn run_replicates(
+    study: &Study,
+    case: &Case,
+    replicates: &Replicates,
+    base: &CaseOutput,
+    base_metrics: &[f64],
+    reference: &CaseOutput,
+    plan: &mut SpectrumPlan,
+    cost: &mut CaseCost,
+) -> ReplicateResults {
+    let chosen = replicated_metrics();
+    let count = replicates.count;
+    let mut values = vec![f64::NAN; chosen.len() * count];
+    for (m, &k) in chosen.iter().enumerate() {
+        values[m * count] = base_metrics[k];
+    }
+    let base_acceleration = base.channel("slider_acceleration").expect("channel exists");
+    // Every replicate parts from replicate 0 while the journal first falls through
+    // the clearance and strikes the races: the horizon is searched after the
+    // transient, in the analysed window (docs/model.md §9.5).
+    let window = study.analysis_window();
+    let mut horizon = f64::INFINITY;
+    for k in 1..count {
+        let cpu_start = thread_cpu();
+        let e = replicates.eccentricity(case.id, k);
+        let run = simulate_perturbed(&case.params, &study.solver, &study.sampling, e)
+            .map_err(|e| e.to_string())
+            .and_then(|out| check_eccentricity(&case.params, &out).map(|()| out));
+        let cpu_simulated = thread_cpu();
+        cost.simulate += cpu_simulated - cpu_start;
+        let Ok(out) = run else {
+            continue;
+        };
+        // Metrics only: the file keeps replicate 0's spectra.
+        if let Ok(a) = analyse(
+            &case.params,
+            &out,
+            reference,
+            study.analysis_window(),
+            &[],
+            plan,
+            None,
+        ) {
+            for (m, &j) in chosen.iter().enumerate() {
+                values[m * count + k] = a.metrics[j];
+            }
+        }
+        let acceleration = out.channel("slider_acceleration").expect("channel exists");
+        horizon = horizon.min(predictability_horizon(
+            &base_acceleration[window.clone()],
+            &acceleration[window.clone()],
+            &out.times[window.clone()],
+            study.sampling.duration,
+        ));
+        cost.analysis += thread_cpu() - cpu_simulated;
+    }
+    let summaries = values.chunks(count).map(Summary::of).collect();
+    ReplicateResults {
+        values,
+        summaries,
+        horizon: if horizon.is_finite() {
+            horizon
+        } else {
+            f64::NAN
+        },
     }
 }
 

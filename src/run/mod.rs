@@ -172,7 +172,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         n_series: layout.series.len() as u64,
         n_freq: layout.frequencies.len() as u64,
         n_spectra: layout.spectra.len() as u64,
-        n_metrics: layout.metrics.len() as u64,
+        n_metrics: layout.n_metric_values() as u64,
         storage: layout.storage,
     };
     let reader = match decide_start(study, opts, &header, rows.len(), start)? {
@@ -481,7 +481,7 @@ fn run_pending(
                     let result = run_case(
                         work.study,
                         row,
-                        &case.params,
+                        case,
                         reference,
                         &mut plan,
                         envelope.as_mut(),

@@ -7,6 +7,7 @@ pub mod envelope;
 pub mod fault_frequencies;
 pub mod indicators;
 pub mod metrics;
+pub mod replicates;
 pub mod sensor;
 pub mod spectrum;
 

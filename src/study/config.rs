@@ -90,6 +90,26 @@ pub struct GridFile {
     /// A sampled design, repeated at every grid point and explicit case.
     #[serde(default)]
     pub design: Option<S<DesignSection>>,
+    /// Run every case several times from perturbed initial states.
+    #[serde(default)]
+    pub replicates: Option<S<ReplicatesSection>>,
+    /// Store each case's predictability horizon and `chaotic` flag (default: on
+    /// with two or more replicates).
+    #[serde(default)]
+    pub chaos_check: Option<S<bool>>,
+}
+
+/// `replicates:`: how many runs per case and how far apart they start.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReplicatesSection {
+    /// Runs per case `R` (replicate 0 unperturbed).
+    pub count: S<u64>,
+    /// Distance of each perturbed start's journal centre from the housing centre (m).
+    pub perturbation: S<Scalar>,
+    /// Seed of the perturbations' directions (default 0).
+    #[serde(default)]
+    pub seed: Option<S<u64>>,
 }
 
 /// One value of an explicit case: a scalar parameter, or a `speed:` profile.

@@ -15,6 +15,7 @@ use super::units::Dimension;
 use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
+mod replicates;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{
     DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
@@ -470,6 +471,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .map(|e| envelope_settings(&ctx, e, &sampling, transient))
         .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
+    let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
     Ok(Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
@@ -488,6 +490,8 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         cases,
         references,
         design: sampled.map(|d| d.info),
+        replicates,
+        chaos_check,
     })
 }
 
@@ -696,6 +700,10 @@ fn check_study_memory(
         cases: total,
         references: references_bound,
         design_values,
+        replicates: file
+            .replicates
+            .as_ref()
+            .map_or(0, |r| r.value.count.value.min(replicates::MAX_REPLICATES)),
     };
     check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
 }

@@ -48,6 +48,17 @@ pub fn available_cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
+/// Values the writer holds per case for `replicates` runs per case (0: none): each
+/// replicated metric per replicate, its mean, deviation and interval, the horizon
+/// and the chaotic flag.
+fn replicate_values(replicates: u64) -> u64 {
+    if replicates == 0 {
+        return 0;
+    }
+    let metrics = crate::signal::replicates::replicated_metrics().len() as u64;
+    replicates * metrics + 3 * metrics + 2
+}
+
 /// Bytes one case takes in the case table of a run: its parameters (with the
 /// waviness harmonics on the heap), their copy in the file's layout (one f64 per
 /// parameter, the location label, case id and reference index), the copies the file
@@ -80,6 +91,8 @@ pub struct Shape {
     pub references: u64,
     /// Values a sampled design holds while the study is expanded (rows × parameters).
     pub design_values: u64,
+    /// Runs per case with `replicates:` (0 without).
+    pub replicates: u64,
 }
 
 /// The memory a run of a study needs at its peak, by part (bytes).
@@ -123,10 +136,13 @@ impl MemoryEstimate {
         let record = (channels * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
         // The encoder shuffles one series at a time.
         let scratch = n * width + WORKER_BYTES;
-        let per_case = series + analysis + record + scratch;
+        // A perturbed replicate's series beside replicate 0's, kept for its horizon.
+        let replicate_series = if shape.replicates > 1 { series } else { 0.0 };
+        let per_case = series + replicate_series + analysis + record + scratch;
         let queued = (2.0 * jobs_f + 1.0) * record;
         let references = shape.references as f64 * series;
-        let case_table = shape.cases as f64 * case_table_bytes()
+        let case_table = shape.cases as f64
+            * (case_table_bytes() + replicate_values(shape.replicates) as f64 * 8.0)
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
@@ -394,6 +410,34 @@ mod tests {
         assert!(parse_size("0").is_err());
     }
 
+    /// Replicates add a second set of series per worker and their values per case.
+    #[test]
+    fn replicates_count_their_series_and_values() {
+        let shape = Shape {
+            samples: 20_001,
+            window: 10_000,
+            spectra: 3,
+            float32: false,
+            cases: 1_000_000,
+            references: 1,
+            design_values: 0,
+            replicates: 0,
+        };
+        let plain = MemoryEstimate::of(shape, 2);
+        let repl = MemoryEstimate::of(
+            Shape {
+                replicates: 16,
+                ..shape
+            },
+            2,
+        );
+        let series = (CHANNELS.len() as f64 + 1.0) * 20_001.0 * 8.0;
+        assert_eq!(repl.per_case - plain.per_case, series);
+        let n = crate::signal::replicates::replicated_metrics().len() as f64;
+        let values = 1e6 * (16.0 * n + 3.0 * n + 2.0) * 8.0;
+        assert!((repl.case_table - plain.case_table - values).abs() < 1e-6 * values);
+    }
+
     #[test]
     fn a_billion_samples_need_far_more_than_a_terabyte_of_nothing() {
         let shape = Shape {
@@ -404,6 +448,7 @@ mod tests {
             cases: 1,
             references: 1,
             design_values: 0,
+            replicates: 0,
         };
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
@@ -418,6 +463,7 @@ mod tests {
                 cases: 10_000_000,
                 references: 1,
                 design_values: 0,
+                replicates: 0,
             },
             2,
         );

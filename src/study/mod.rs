@@ -111,6 +111,39 @@ pub struct Study {
     pub references: Vec<CaseParams>,
     /// The sampled design, when the grid file has one.
     pub design: Option<DesignInfo>,
+    /// Replicates per case, when the grid file asks for them.
+    pub replicates: Option<Replicates>,
+    /// Whether each case's predictability horizon is computed from its replicates.
+    pub chaos_check: bool,
+}
+
+/// A study's `replicates:`: every case runs `count` times, replicate `k ≥ 1` from
+/// the journal centre displaced by `perturbation` in a direction drawn from
+/// `seed`, the case id and `k` (docs/model.md §9.5); replicate 0 is the case itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Replicates {
+    /// Runs per case, replicate 0 included (≥ 1).
+    pub count: usize,
+    /// Size of the initial eccentricity of replicates `k ≥ 1` (m).
+    pub perturbation: f64,
+    /// Seed of the directions.
+    pub seed: u64,
+}
+
+impl Replicates {
+    /// The initial journal-centre eccentricity of replicate `k` of case `id` (m):
+    /// zero for `k = 0`, else `perturbation (cos θ, sin θ)` with `θ = 2π u` and `u`
+    /// the first [`design::SplitMix64`] draw seeded with
+    /// `seed ⊕ (id · 2^32 + k) · φ64` (`φ64` = 0x9E3779B97F4A7C15).
+    pub fn eccentricity(&self, id: u64, k: usize) -> [f64; 2] {
+        if k == 0 {
+            return [0.0; 2];
+        }
+        let key = (id << 32).wrapping_add(k as u64);
+        let mut rng = design::SplitMix64::new(self.seed ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let (s, c) = (std::f64::consts::TAU * rng.next_f64()).sin_cos();
+        [self.perturbation * c, self.perturbation * s]
+    }
 }
 
 /// A study's sampled design (`design:`), as the study file records it.
@@ -190,6 +223,7 @@ impl Study {
                     .design
                     .as_ref()
                     .map_or(0, |d| d.rows * d.parameters.len() as u64),
+                replicates: self.replicates.map_or(0, |r| r.count as u64),
             },
             jobs,
         )
