@@ -5,7 +5,7 @@ use crate::mechanism::{CaseParams, Location};
 use crate::output::Status;
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
-use crate::simulate::{simulate, CaseOutput};
+use crate::simulate::{channel_index, simulate, CaseOutput};
 use crate::study::Study;
 
 /// What one case contributes to the file, owned so it can cross threads.
@@ -17,7 +17,8 @@ pub(crate) struct CaseResult {
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`crate::simulate::CHANNELS`] entry (empty when failed).
+    /// One series per [`crate::simulate::CHANNELS`] entry, then per sensor its
+    /// noisy and its noise-free series (empty when failed).
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
@@ -36,13 +37,15 @@ pub(crate) struct CaseCost {
     pub analysis: f64,
 }
 
-/// Simulates `params` at file row `row` and derives spectra and metrics against
+/// Simulates `params` (case `case_id`) at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed), and the envelope analysis
-/// when the study has one (`envelope`, planned for it). Never fails: a failure
+/// when the study has one (`envelope`, planned for it), and the study's sensors'
+/// series (docs/model.md §7.8). Never fails: a failure
 /// becomes a [`Status::Failed`] result with its message.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
+    case_id: u64,
     params: &CaseParams,
     reference: &CaseOutput,
     plan: &mut SpectrumPlan,
@@ -94,13 +97,20 @@ pub(crate) fn run_case(
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
     };
+    let mut series = out.channels;
+    let dt = 1.0 / study.sampling.sample_rate;
+    for (index, sensor) in study.sensors.iter().enumerate() {
+        let input = &series[channel_index(sensor.channel).expect("sensor channels are validated")];
+        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case_id, index);
+        series.extend([noisy, clean]);
+    }
     metrics.push(start.elapsed().as_secs_f64());
     cost.analysis = thread_cpu() - cpu_simulated;
     CaseResult {
         row,
         status: Status::Ok,
         message: String::new(),
-        series: out.channels,
+        series,
         spectra,
         metrics,
         cost,

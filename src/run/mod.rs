@@ -481,6 +481,7 @@ fn run_pending(
                     let result = run_case(
                         work.study,
                         row,
+                        case.id,
                         &case.params,
                         reference,
                         &mut plan,

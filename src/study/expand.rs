@@ -15,9 +15,11 @@ use super::units::Dimension;
 use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
+mod sensors;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{DampingModel, Harmonic, RaceWaviness};
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
+use crate::output::study_layout;
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
@@ -437,7 +439,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .map(|e| envelope_settings(&ctx, e, &sampling, transient))
         .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
-    Ok(Study {
+    let mut study = Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
         source: text.to_string(),
@@ -455,7 +457,16 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         cases,
         references,
         design: sampled.map(|d| d.info),
-    })
+        sensors: Vec::new(),
+    };
+    if let Some(list) = &file.sensors {
+        let taken = study_layout(&study, &[], None)
+            .names()
+            .map(str::to_string)
+            .collect();
+        study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken)?;
+    }
+    Ok(study)
 }
 
 /// `duration` and `sample_rate`, checked.
@@ -655,6 +666,7 @@ fn check_study_memory(
                 .envelope
                 .as_ref()
                 .map_or(0, |e| 2 * e.value.channels.value.len()),
+        sensor_series: file.sensors.as_ref().map_or(0, |s| 2 * s.value.len()),
         float32: file
             .output
             .as_ref()
