@@ -26,7 +26,7 @@ const SMALL: &str = "name: small\nduration: 0.05\nsample_rate: 10000\ntransient:
 
 /// Asserts two study files hold the same data: layout (but the `created` time),
 /// every case's series, spectra, metrics (but wall time), status and message.
-fn assert_same_data(a: &Path, b: &Path) {
+pub(crate) fn assert_same_data(a: &Path, b: &Path) {
     let (ra, rb) = (StudyReader::open(a).unwrap(), StudyReader::open(b).unwrap());
     let (la, lb) = (ra.layout(), rb.layout());
     assert_eq!(la.case_ids, lb.case_ids);
@@ -243,7 +243,7 @@ fn shards_merge_into_the_single_run() {
 
 /// Starts `studyrun` in `dir` with `args` and kills it (-9) once `journal` holds more
 /// than `bytes` bytes.
-fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
+pub(crate) fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
     let mut child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)

@@ -25,6 +25,7 @@ mod isa;
 mod parity;
 mod properties;
 mod refusals;
+mod sensors;
 mod stiffness;
 mod validation;
 mod variable_speed;
