@@ -165,7 +165,7 @@ fn sensor_series_survive_kill_and_resume_bit_for_bit() {
     crate::common::studyrun_ok(d, &["long.yaml", "--resume", "-q"]);
     crate::common::studyrun_ok(d, &["long.yaml", "-o", "straight.h5", "-q"]);
     crate::cli::assert_same_data(&d.join("long.h5"), &d.join("straight.h5"));
-    let reader = StudyReader::open(&d.join("long.h5")).unwrap();
+    let reader = StudyReader::open(d.join("long.h5")).unwrap();
     assert!(reader.layout().series.iter().any(|s| s.name == "acc_clean"));
 }
 

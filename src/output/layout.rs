@@ -460,8 +460,8 @@ impl Layout {
             .chain(&self.reference_series)
     }
 
-    /// Every variable name the file holds: the built-in names, then
-    /// [`Layout::specs`]'.
+    /// Every variable name the file holds: the built-in names, then the parameters,
+    /// metrics, series, spectra, reference parameters and reference series.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         RESERVED
             .into_iter()
