@@ -37,11 +37,11 @@ pub(crate) struct CaseCost {
     pub analysis: f64,
 }
 
-/// Simulates `params` (case `case_id`) at file row `row` and derives spectra and metrics against
-/// `reference` (the ideal mechanism at the same speed), and the envelope analysis
-/// when the study has one (`envelope`, planned for it), and the study's sensors'
-/// series (docs/model.md §7.8). Never fails: a failure
-/// becomes a [`Status::Failed`] result with its message.
+/// Simulates `params` (case `case_id`) at file row `row` and derives spectra and
+/// metrics against `reference` (the ideal mechanism at the same speed), the envelope
+/// analysis when the study has one (`envelope`, planned for it) and the series of
+/// the study's sensors (docs/model.md §7.8). Never fails: a failure becomes a
+/// [`Status::Failed`] result with its message.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,

@@ -66,7 +66,8 @@ impl Sensor {
         let units = CHANNELS
             .iter()
             .find(|c| c.name == self.channel)
-            .map_or("1", |c| c.units);
+            .expect("sensor channels are validated")
+            .units;
         let what = format!(
             "sensor {} (f_n = {} Hz, damping ratio {}) on {}",
             self.name,
