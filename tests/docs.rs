@@ -12,8 +12,8 @@ use std::path::Path;
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
     BearingSection, DefectSection, DesignParameter, DesignSection, EnvelopeSection,
-    GeometrySection, GridFile, HarmonicSection, MechanismSection, OutputSection, ReplicatesSection,
-    SolverSection, SpectraSection, SpeedSection, WavinessSection,
+    GeometrySection, GridFile, HarmonicSection, MechanismSection, NoiseSection, OutputSection,
+    ReplicatesSection, SensorSection, SolverSection, SpectraSection, SpeedSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -250,6 +250,8 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<DesignParameter>("design.parameters.*."));
     expected.extend(keys_of::<SpeedSection>("speed."));
     expected.extend(keys_of::<ReplicatesSection>("replicates."));
+    expected.extend(keys_of::<SensorSection>("sensors[]."));
+    expected.extend(keys_of::<NoiseSection>("sensors[].noise."));
     assert!(expected.contains("bearing.waviness.amplitude") && expected.contains("zip"));
 
     let doc = grid_file_doc();

@@ -28,6 +28,7 @@ mod parity;
 mod properties;
 mod refusals;
 mod replicates;
+mod sensors;
 mod stiffness;
 mod validation;
 mod variable_speed;

@@ -487,6 +487,14 @@ impl Layout {
             .chain(&self.reference_series)
     }
 
+    /// Every variable name the file holds: the built-in names, then the parameters,
+    /// metrics, series, spectra, reference parameters and reference series.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        RESERVED
+            .into_iter()
+            .chain(self.specs().map(|s| s.name.as_str()))
+    }
+
     fn check_names(&self) -> Result<(), String> {
         let mut seen: HashSet<&str> = RESERVED.into_iter().collect();
         for spec in self.specs() {

@@ -226,6 +226,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         series: CHANNELS
             .iter()
             .map(|c| VarSpec::new(c.name, c.units, c.long_name))
+            .chain(study.sensors.iter().flat_map(|s| s.specs()))
             .collect(),
         spectra: study
             .spectrum_channels

@@ -7,7 +7,7 @@ use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
-use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
+use crate::simulate::{channel_index, simulate, simulate_perturbed, CaseOutput};
 use crate::study::{Case, Replicates, Study};
 
 /// What one case contributes to the file, owned so it can cross threads.
@@ -19,7 +19,8 @@ pub(crate) struct CaseResult {
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`crate::simulate::CHANNELS`] entry (empty when failed).
+    /// One series per [`crate::simulate::CHANNELS`] entry, then per sensor its
+    /// noisy and its noise-free series (empty when failed).
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
@@ -41,12 +42,13 @@ pub(crate) struct CaseCost {
 }
 
 /// Simulates `case` at file row `row` and derives spectra and metrics against
-/// `reference` (the ideal mechanism at the same speed), and the envelope analysis
-/// when the study has one (`envelope`, planned for it); with replicates, runs its
-/// perturbed replicates one after the other and adds their metrics, statistics and
-/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the
-/// case (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
-/// perturbed replicate only leaves its metrics NaN.
+/// `reference` (the ideal mechanism at the same speed), the envelope analysis when
+/// the study has one (`envelope`, planned for it) and the series of the study's
+/// sensors (docs/model.md §7.8); with replicates, runs its perturbed replicates one
+/// after the other and adds their metrics, statistics and predictability horizon
+/// (docs/model.md §9.5). Never fails: a failure of the case (replicate 0) becomes a
+/// [`Status::Failed`] result with its message; a failed perturbed replicate only
+/// leaves its metrics NaN.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
@@ -108,6 +110,13 @@ pub(crate) fn run_case(
     let replicates = study
         .replicates
         .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
+    let mut series = out.channels;
+    let dt = 1.0 / study.sampling.sample_rate;
+    for (index, sensor) in study.sensors.iter().enumerate() {
+        let input = &series[channel_index(sensor.channel).expect("sensor channels are validated")];
+        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
+        series.extend([noisy, clean]);
+    }
     metrics.push(start.elapsed().as_secs_f64());
     if let Some(r) = replicates {
         metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
@@ -126,7 +135,7 @@ pub(crate) fn run_case(
         row,
         status: Status::Ok,
         message: String::new(),
-        series: out.channels,
+        series,
         spectra,
         metrics,
         cost,

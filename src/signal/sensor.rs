@@ -11,7 +11,84 @@
 
 use std::ops::Range;
 
+use crate::output::VarSpec;
+use crate::simulate::CHANNELS;
 use crate::study::design::SplitMix64;
+
+/// Suffix of the noise-free series of a sensor (`<name>_clean`).
+pub const CLEAN_SUFFIX: &str = "_clean";
+
+/// One sensor of a study (`sensors:`): what it measures and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensor {
+    /// Name of its series: `<name>` (with noise) and `<name>_clean` (without).
+    pub name: String,
+    /// The stored series it measures (a [`CHANNELS`] name).
+    pub channel: &'static str,
+    /// Its dynamics.
+    pub transducer: Transducer,
+    /// Its measurement noise; `None`: `<name>` equals `<name>_clean`.
+    pub noise: Option<Noise>,
+}
+
+/// White Gaussian measurement noise of a sensor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Noise {
+    /// Signal-to-noise ratio over the analysed window (dB, finite).
+    pub snr_db: f64,
+    /// The study seed of [`noise_seed`].
+    pub seed: u64,
+}
+
+impl Sensor {
+    /// The sensor's output for the `input` series (the stored [`Sensor::channel`],
+    /// sampled every `dt` s) of case `case_id`, the sensor being number `index` of
+    /// its study: `(noisy, clean)`, the noise at the requested SNR over `window`.
+    pub fn measure(
+        &self,
+        input: &[f64],
+        dt: f64,
+        window: Range<usize>,
+        case_id: u64,
+        index: usize,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let clean = self.transducer.respond(input, dt);
+        let noisy = match self.noise {
+            Some(n) => add_noise(&clean, window, n.snr_db, noise_seed(n.seed, case_id, index)),
+            None => clean.clone(),
+        };
+        (noisy, clean)
+    }
+
+    /// The variables of its series, in file order: `<name>`, then `<name>_clean`,
+    /// in the units of the measured channel.
+    pub fn specs(&self) -> [VarSpec; 2] {
+        let units = CHANNELS
+            .iter()
+            .find(|c| c.name == self.channel)
+            .expect("sensor channels are validated")
+            .units;
+        let what = format!(
+            "sensor {} (f_n = {} Hz, damping ratio {}) on {}",
+            self.name,
+            self.transducer.natural_frequency,
+            self.transducer.damping_ratio,
+            self.channel
+        );
+        let noisy = match self.noise {
+            Some(n) => format!("{what}, with white Gaussian noise at {} dB SNR", n.snr_db),
+            None => format!("{what} (no noise: equal to {}{CLEAN_SUFFIX})", self.name),
+        };
+        [
+            VarSpec::new(&self.name, units, noisy),
+            VarSpec::new(
+                format!("{}{CLEAN_SUFFIX}", self.name),
+                units,
+                format!("{what}, noise-free"),
+            ),
+        ]
+    }
+}
 
 /// A one-way resonant transducer (single degree of freedom, unit static gain).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -72,6 +72,9 @@ pub struct GridFile {
     /// Envelope analysis and condition indicators (none when absent).
     #[serde(default)]
     pub envelope: Option<S<EnvelopeSection>>,
+    /// Transducers applied to stored series (none when absent).
+    #[serde(default)]
+    pub sensors: Option<S<Vec<S<SensorSection>>>>,
     /// File storage settings.
     #[serde(default)]
     pub output: Option<OutputSection>,
@@ -313,6 +316,34 @@ pub struct EnvelopeSection {
     /// `[low, high]` frequencies, or `auto` (the fast kurtogram); default `auto`.
     #[serde(default)]
     pub band: Option<S<BandValue>>,
+}
+
+/// One entry of `sensors:`: a resonant transducer on a stored series.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSection {
+    /// Name of the sensor's series (`<name>` noisy, `<name>_clean` noise-free).
+    pub name: S<String>,
+    /// The stored series it measures (a name of `crate::simulate::CHANNELS`).
+    pub channel: S<String>,
+    /// Undamped natural frequency (Hz, or a quantity such as `"20 kHz"`).
+    pub natural_frequency: S<Scalar>,
+    /// Damping ratio (1).
+    pub damping_ratio: S<f64>,
+    /// White Gaussian measurement noise (none when absent).
+    #[serde(default)]
+    pub noise: Option<S<NoiseSection>>,
+}
+
+/// `sensors[].noise`: white Gaussian noise at a signal-to-noise ratio.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSection {
+    /// Signal-to-noise ratio over the analysed window (dB).
+    pub snr_db: S<f64>,
+    /// The noise generator's study seed (default 0).
+    #[serde(default)]
+    pub seed: Option<S<u64>>,
 }
 
 /// An `envelope.band` as written.

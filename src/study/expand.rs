@@ -16,11 +16,13 @@ use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
 mod replicates;
+mod sensors;
 use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{
     DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
 };
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
+use crate::output::study_layout;
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
@@ -472,7 +474,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
-    Ok(Study {
+    let mut study = Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
         source: text.to_string(),
@@ -492,7 +494,16 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         design: sampled.map(|d| d.info),
         replicates,
         chaos_check,
-    })
+        sensors: Vec::new(),
+    };
+    if let Some(list) = &file.sensors {
+        let taken = study_layout(&study, &[], None)
+            .names()
+            .map(str::to_string)
+            .collect();
+        study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken)?;
+    }
+    Ok(study)
 }
 
 /// `duration` and `sample_rate`, checked.
@@ -692,6 +703,7 @@ fn check_study_memory(
                 .envelope
                 .as_ref()
                 .map_or(0, |e| 2 * e.value.channels.value.len()),
+        sensor_series: file.sensors.as_ref().map_or(0, |s| 2 * s.value.len()),
         float32: file
             .output
             .as_ref()

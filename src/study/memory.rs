@@ -83,6 +83,8 @@ pub struct Shape {
     pub window: u64,
     /// Spectrum channels.
     pub spectra: usize,
+    /// Series per case beyond the simulated channels: two per sensor.
+    pub sensor_series: usize,
     /// Series and spectra stored as float32.
     pub float32: bool,
     /// Cases in the study.
@@ -126,13 +128,20 @@ impl MemoryEstimate {
         let n_w = shape.window as f64;
         let n_f = (shape.window / 2 + 1) as f64;
         let s = shape.spectra as f64;
-        let channels = CHANNELS.len() as f64;
+        let simulated = CHANNELS.len() as f64;
+        let channels = simulated + shape.sensor_series as f64;
         let width = if shape.float32 { 4.0 } else { 8.0 };
         let jobs_f = jobs.max(1) as f64;
         // The case's series and their times, float64.
         let series = (channels + 1.0) * n * 8.0;
         // Spectra, the FFT's window, input, output and scratch, the metrics' temporaries.
-        let analysis = s * n_f * 8.0 + 3.0 * n_w * 8.0 + 2.0 * n_f * 16.0;
+        // A sensor's noise draws are held while its noisy series is made.
+        let draws = if shape.sensor_series > 0 {
+            n * 8.0
+        } else {
+            0.0
+        };
+        let analysis = s * n_f * 8.0 + 3.0 * n_w * 8.0 + 2.0 * n_f * 16.0 + draws;
         let record = (channels * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
         // The encoder shuffles one series at a time.
         let scratch = n * width + WORKER_BYTES;
@@ -140,7 +149,8 @@ impl MemoryEstimate {
         let replicate_series = if shape.replicates > 1 { series } else { 0.0 };
         let per_case = series + replicate_series + analysis + record + scratch;
         let queued = (2.0 * jobs_f + 1.0) * record;
-        let references = shape.references as f64 * series;
+        // The references have the simulated channels only.
+        let references = shape.references as f64 * (simulated + 1.0) * n * 8.0;
         let case_table = shape.cases as f64
             * (case_table_bytes() + replicate_values(shape.replicates) as f64 * 8.0)
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
@@ -422,6 +432,7 @@ mod tests {
             references: 1,
             design_values: 0,
             replicates: 0,
+            sensor_series: 0,
         };
         let plain = MemoryEstimate::of(shape, 2);
         let repl = MemoryEstimate::of(
@@ -444,6 +455,7 @@ mod tests {
             samples: 1_000_000_001,
             window: 999_000_000,
             spectra: 3,
+            sensor_series: 0,
             float32: false,
             cases: 1,
             references: 1,
@@ -459,6 +471,7 @@ mod tests {
                 samples: 2_501,
                 window: 2_000,
                 spectra: 3,
+                sensor_series: 0,
                 float32: false,
                 cases: 10_000_000,
                 references: 1,
@@ -469,6 +482,33 @@ mod tests {
         );
         assert!(!small.dominated_by_samples());
         assert!(small.case_table > 10_000_000.0 * 400.0);
+    }
+
+    #[test]
+    fn sensor_series_count_in_each_case_and_record_but_not_in_the_references() {
+        let shape = |sensor_series| Shape {
+            samples: 100_001,
+            window: 80_000,
+            spectra: 3,
+            sensor_series,
+            float32: true,
+            cases: 100,
+            references: 2,
+            design_values: 0,
+            replicates: 0,
+        };
+        let (without, with) = (
+            MemoryEstimate::of(shape(0), 2),
+            MemoryEstimate::of(shape(4), 2),
+        );
+        let n = 100_001.0;
+        // Four float64 series and the noise draws in the worker; four float32 series
+        // (with the chunk overhead) in the record.
+        let record = 4.0 * n * 4.0 * (1.0 + 1.0 / 64.0);
+        assert!((with.record - without.record - record).abs() < 1e-6);
+        let per_case = 4.0 * n * 8.0 + n * 8.0 + record;
+        assert!((with.per_case - without.per_case - per_case).abs() < 1e-6);
+        assert_eq!(with.references, without.references);
     }
 
     #[test]

@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use crate::mechanism::CaseParams;
 use crate::signal::envelope::EnvelopeSettings;
+use crate::signal::sensor::Sensor;
 use crate::simulate::Sampling;
 use crate::solve::SolverSettings;
 
@@ -99,6 +100,10 @@ pub struct Study {
     /// The envelope analysis and condition indicators (`envelope:`); none when the
     /// grid has no `envelope:`, and then nothing of it is computed or stored.
     pub envelope: Option<EnvelopeSettings>,
+    /// The transducers applied to stored series (`sensors:`, docs/model.md §7.8), in
+    /// file order; empty when the grid has none, and then nothing of them is
+    /// computed or stored.
+    pub sensors: Vec<Sensor>,
     /// Store series and spectra as float32.
     pub float32: bool,
     /// Deflate level (0 = none).
@@ -216,6 +221,7 @@ impl Study {
                 window: self.analysis_window().len() as u64,
                 spectra: self.spectrum_channels.len()
                     + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
+                sensor_series: 2 * self.sensors.len(),
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,

@@ -1,0 +1,116 @@
+//! The `sensors:` section resolved into [`Sensor`]s (docs/model.md §7.8), each value
+//! checked where it is written.
+
+use std::collections::HashSet;
+
+use super::{at, channel_named, Ctx};
+use crate::signal::sensor::{Noise, Sensor, Transducer, CLEAN_SUFFIX};
+use crate::simulate::Sampling;
+use crate::study::config::{SensorSection, S};
+use crate::study::units::Dimension;
+use crate::study::StudyError;
+
+/// The sensors of `list` for a study sampled as `sampling`. `taken` holds the names
+/// of every other variable of the study file: neither `<name>` nor `<name>_clean`
+/// may be one of them or another sensor's.
+pub(super) fn sensors(
+    ctx: &Ctx<'_>,
+    list: &S<Vec<S<SensorSection>>>,
+    sampling: &Sampling,
+    taken: &HashSet<String>,
+) -> Result<Vec<Sensor>, StudyError> {
+    let nyquist = 0.5 * sampling.sample_rate;
+    let mut sensors: Vec<Sensor> = Vec::with_capacity(list.value.len());
+    let mut own: HashSet<String> = HashSet::new();
+    for (k, entry) in list.value.iter().enumerate() {
+        let s = &entry.value;
+        let field = |key: &str| format!("sensors[{k}].{key}");
+        let name = &s.name.value;
+        let name_at = Some(at(&s.name.referenced));
+        let valid = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid {
+            return Err(ctx.err(
+                name_at,
+                &field("name"),
+                format!(
+                    "`{name}` is not a sensor name; expected a letter followed by letters, \
+                     digits or `_`"
+                ),
+            ));
+        }
+        for series in [name.clone(), format!("{name}{CLEAN_SUFFIX}")] {
+            if taken.contains(&series) {
+                return Err(ctx.err(
+                    name_at,
+                    &field("name"),
+                    format!(
+                        "`{name}` would store the series `{series}`, which is already a \
+                         variable of the study file; choose another name"
+                    ),
+                ));
+            }
+            if !own.insert(series.clone()) {
+                return Err(ctx.err(
+                    name_at,
+                    &field("name"),
+                    format!("`{name}`: the series `{series}` is another sensor's; names must be distinct"),
+                ));
+            }
+        }
+        let channel = channel_named(ctx, &s.channel, &field("channel"))?;
+        let f_n = ctx.quantity(
+            &s.natural_frequency,
+            Dimension::Frequency,
+            &field("natural_frequency"),
+        )?;
+        if !(f_n > 0.0 && f_n < nyquist) {
+            return Err(ctx.err(
+                Some(at(&s.natural_frequency.referenced)),
+                &field("natural_frequency"),
+                format!(
+                    "{f_n} Hz; expected 0 < natural_frequency < sample_rate/2 = {nyquist} Hz \
+                     (the Nyquist frequency)"
+                ),
+            ));
+        }
+        let zeta = s.damping_ratio.value;
+        if !(zeta.is_finite() && zeta > 0.0) {
+            return Err(ctx.err(
+                Some(at(&s.damping_ratio.referenced)),
+                &field("damping_ratio"),
+                format!("{zeta}; expected a finite damping ratio > 0"),
+            ));
+        }
+        let noise = match &s.noise {
+            None => None,
+            Some(n) => {
+                let snr = &n.value.snr_db;
+                if !snr.value.is_finite() {
+                    return Err(ctx.err(
+                        Some(at(&snr.referenced)),
+                        &field("noise.snr_db"),
+                        format!(
+                            "{}; expected a finite signal-to-noise ratio in dB",
+                            snr.value
+                        ),
+                    ));
+                }
+                Some(Noise {
+                    snr_db: snr.value,
+                    seed: n.value.seed.as_ref().map_or(0, |s| s.value),
+                })
+            }
+        };
+        sensors.push(Sensor {
+            name: name.clone(),
+            channel,
+            transducer: Transducer {
+                natural_frequency: f_n,
+                damping_ratio: zeta,
+            },
+            noise,
+        });
+    }
+    Ok(sensors)
+}
