@@ -46,13 +46,19 @@ def pass_frequency(race, location, rpm, balls, d_i, d_o):
 
 
 def read(path):
-    """The cases of a fault study file as a list of dicts, with spectra."""
+    """The constant-speed cases of a fault study file as a list of dicts, with spectra
+    (a run-up's lines sweep with the speed: those cases have `rpm` NaN and are left out)."""
     with h5py.File(path, "r") as f:
         text = lambda name: [v.decode() for v in f[name][:]]  # noqa: E731
         freq = f["frequency"][:]
         spectra = f[f"{CHANNEL}_spectrum"][:]
         cases = []
         for k, (loc, fault, race) in enumerate(zip(text("location"), text("fault"), text("defect_race"))):
+            rpm = float(f["rpm"][k])
+            if not np.isfinite(rpm) and "speed_from" in f and f["speed_from"][k] == f["speed_to"][k]:
+                rpm = float(f["speed_from"][k])  # a ramp that stays at one speed
+            if not np.isfinite(rpm):
+                continue
             cases.append(
                 {
                     "location": loc,
@@ -60,7 +66,7 @@ def read(path):
                     "race": race,
                     "width": float(f["defect_width"][k]),
                     "depth": float(f["defect_depth"][k]),
-                    "rpm": float(f["rpm"][k]),
+                    "rpm": rpm,
                     "balls": int(f["ball_count"][k]),
                     "d_i": float(f["inner_race_diameter"][k]),
                     "d_o": float(f["outer_race_diameter"][k]),

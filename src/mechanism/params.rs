@@ -162,6 +162,15 @@ impl CaseParams {
         }
     }
 
+    /// The crank speed (rev/min) if it never changes: `rpm`, or the speed of a
+    /// profile that stays at one speed; `None` for a varying speed.
+    pub fn constant_rpm(&self) -> Option<f64> {
+        match &self.speed {
+            None => Some(self.rpm),
+            Some(p) => p.constant_rpm(),
+        }
+    }
+
     /// The time of the crank's first revolution (s): `60/rpm` at constant speed.
     pub fn revolution_time(&self) -> f64 {
         match &self.speed {

@@ -26,10 +26,11 @@ impl FaultFrequencies {
     /// `ω̄_i = ω`, `ω̄_o = 0` at crank_ground and `ω̄_i = 0` (the rod's mean),
     /// `ω̄_o = ω` at crank_rod, `ω = 2π rpm/60`; the cage turns at
     /// `ω̄_m = (ω̄_i d_i + ω̄_o d_o)/(d_i + d_o)`; `D = (d_o − d_i)/2` and
-    /// `d_m = (d_i + d_o)/2`. A varying crank speed (`rpm` NaN) gives NaN: its
-    /// lines move with the speed.
+    /// `d_m = (d_i + d_o)/2`. A varying crank speed gives NaN: its lines move with
+    /// the speed (a profile that stays at one speed counts as that speed).
     pub fn of(params: &CaseParams) -> Self {
-        let omega = std::f64::consts::TAU * params.rpm / 60.0;
+        let rpm = params.constant_rpm().unwrap_or(f64::NAN);
+        let omega = std::f64::consts::TAU * rpm / 60.0;
         let (wi, wo) = match params.location {
             Location::CrankGround => (omega, 0.0),
             Location::CrankRod => (0.0, omega),
