@@ -375,29 +375,8 @@ fn each_law_runs_through_the_study_path_and_its_ledger_closes() {
 /// |driver work| over two revolutions (DOP853, rtol 1e-12), and the dissipated
 /// energy (J).
 fn ledger_balance(case: &CaseParams) -> (f64, f64) {
-    let mut mech = SliderCrank::new(case).unwrap().with_energy_ledger(true);
-    let y0 = mech.initial_state();
-    let duration = 2.0 * 60.0 / case.rpm;
-    let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
-    let settings = SolverSettings::new(Method::Dop853 {
-        rtol: 1e-12,
-        atol: 1e-16,
-    });
-    let mut start = None;
-    let (mut worst, mut scale, mut dissipated) = (0.0f64, 0.0f64, 0.0);
-    integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
-        let e = m.energy(t, y)?;
-        let l = m.ledger(y);
-        let (ke0, v0) = *start.get_or_insert((e.kinetic, e.potential));
-        let residual = l.driver_work
-            - (e.kinetic - ke0 + e.potential - v0 - l.explicit_potential_work + l.dissipated);
-        worst = worst.max(residual.abs());
-        scale = scale.max(l.driver_work.abs());
-        dissipated = l.dissipated;
-        Ok(())
-    })
-    .unwrap();
-    (worst / scale, dissipated)
+    let b = crate::common::production_balance(case, 2.0, 1e-12, 1e-16);
+    (b.relative, b.dissipated)
 }
 
 /// Bad values are refused naming the field, with the place in the file.

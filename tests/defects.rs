@@ -249,29 +249,8 @@ fn energy_balance_closes_with_rounded_defects() {
             };
             case.bearing.damping = 0.0;
             case.bearing.defects = vec![defect(race, 2e-3, 20e-6, DefectProfile::Rounded)];
-            let mut mech = SliderCrank::new(&case).unwrap().with_energy_ledger(true);
-            let y0 = mech.initial_state();
-            let duration = 2.0 * 60.0 / case.rpm;
-            let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
-            let settings = SolverSettings::new(Method::Dop853 {
-                rtol: 1e-12,
-                atol: 1e-16,
-            });
-            let mut start = None;
-            let (mut worst, mut scale, mut moving) = (0.0f64, 0.0f64, 0.0f64);
-            integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
-                let e = m.energy(t, y)?;
-                let l = m.ledger(y);
-                let (ke0, v0) = *start.get_or_insert((e.kinetic, e.potential));
-                let residual = l.driver_work
-                    - (e.kinetic - ke0 + e.potential - v0 - l.explicit_potential_work
-                        + l.dissipated);
-                worst = worst.max(residual.abs());
-                scale = scale.max(l.driver_work.abs());
-                moving = moving.max(l.explicit_potential_work.abs());
-                Ok(())
-            })
-            .unwrap();
+            let b = crate::common::production_balance(&case, 2.0, 1e-12, 1e-16);
+            let (worst, scale, moving) = (b.relative * b.scale, b.scale, b.moving);
             println!(
                 "{location} {race}: residual / driver work {:.2e}, |∫∂V/∂t| up to {moving:.3e} J",
                 worst / scale

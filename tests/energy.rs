@@ -2,7 +2,7 @@
 //! on the Cartesian reference and on the production model (its ledger, §3.8).
 
 use studyrun::bearing::{DampingModel, RaceWaviness};
-use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location, SliderCrank};
+use studyrun::mechanism::{CartesianSliderCrank, CaseParams, Location};
 use studyrun::solve::{integrate, Method, SolverSettings};
 
 /// Largest balance residual over the run, relative to the largest |driver work|
@@ -99,34 +99,11 @@ fn balance_closes_with_gravity() {
     assert!(rel < 1e-7, "balance residual with gravity {rel:e}");
 }
 
-/// The production model's balance (docs/model.md §3.8) over `revolutions` with
-/// DOP853 at `rtol` (atol `1e-4 rtol`), its contact switches located: the largest
-/// residual relative to the largest |driver work|, the dissipated energy (J) and
-/// the driver-work scale (J).
+/// The production model's balance over `revolutions` at `rtol` (atol `1e-4 rtol`):
+/// the relative residual, the dissipated energy (J) and the driver-work scale (J).
 fn production_balance(case: &CaseParams, revolutions: f64, rtol: f64) -> (f64, f64, f64) {
-    let mut mech = SliderCrank::new(case).unwrap().with_energy_ledger(true);
-    let y0 = mech.initial_state();
-    let duration = revolutions * 60.0 / case.rpm;
-    let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
-    let settings = SolverSettings::new(Method::Dop853 {
-        rtol,
-        atol: 1e-4 * rtol,
-    });
-    let mut start = None;
-    let (mut worst, mut scale, mut dissipated) = (0.0f64, 0.0f64, 0.0);
-    integrate(&mut mech, &settings, 0.0, &y0, &times, |m, t, y| {
-        let e = m.energy(t, y)?;
-        let l = m.ledger(y);
-        let (ke0, v0) = *start.get_or_insert((e.kinetic, e.potential));
-        let residual = l.driver_work
-            - (e.kinetic - ke0 + e.potential - v0 - l.explicit_potential_work + l.dissipated);
-        worst = worst.max(residual.abs());
-        scale = scale.max(l.driver_work.abs());
-        dissipated = l.dissipated;
-        Ok(())
-    })
-    .unwrap();
-    (worst / scale, dissipated, scale)
+    let b = crate::common::production_balance(case, revolutions, rtol, 1e-4 * rtol);
+    (b.relative, b.dissipated, b.scale)
 }
 
 /// The production model's ledger closes to integration accuracy: in every scene of
