@@ -177,12 +177,61 @@ def report(cases, metric):
             "2b_best9": f2b, "3": f3, "3_off": f3off}
 
 
+def figure(cases, metric, path, dpi=110):
+    """The metric's mean ± 95 % interval against ball count, one panel per location
+    and waviness amplitude, one line per speed; hollow markers are chaotic cases.
+    Writes the PNG at `path` and returns it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    waviness = sorted({c.waviness for c in cases})
+    speeds = sorted({c.rpm for c in cases})
+    fig, axes = plt.subplots(
+        len(waviness), len(LOCATIONS), figsize=(10, 3.4 * len(waviness)), squeeze=False, sharex=True
+    )
+    colours = dict(zip(speeds, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
+    for (i, w), (j, loc) in itertools.product(enumerate(waviness), enumerate(LOCATIONS)):
+        ax = axes[i][j]
+        for rpm in speeds:
+            line = sorted((c for c in cases if c.location == loc and c.waviness == w and c.rpm == rpm),
+                          key=lambda c: c.balls)
+            if not line:
+                continue
+            x = [c.balls for c in line]
+            y = [c.mean for c in line]
+            err = [c.ci95 for c in line]
+            colour = colours[rpm]
+            ax.errorbar(x, y, yerr=err, capsize=4, marker="o", color=colour, label=f"{rpm:g} rpm")
+            for c in line:
+                if c.chaotic == 1:
+                    ax.plot(c.balls, c.mean, "o", mfc="white", mec=colour, ms=9)
+        ax.set_title(f"{loc}, waviness {w * 1e6:g} µm")
+        ax.set_xticks(BALLS)
+        ax.grid(alpha=0.3)
+        if i == len(waviness) - 1:
+            ax.set_xlabel("ball count")
+        if j == 0:
+            ax.set_ylabel("mean ± 95 % interval")
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{metric} over the replicates; hollow markers: chaotic cases (replicates part)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("study", help="study file with replicates")
     parser.add_argument("--metric", default="slider_acceleration_rms_deviation")
+    parser.add_argument("--figure", help="also write the metric per ball count as this PNG")
     args = parser.parse_args(argv)
-    report(load(args.study, args.metric), args.metric)
+    cases = load(args.study, args.metric)
+    report(cases, args.metric)
+    if args.figure:
+        print("wrote", figure(cases, args.metric, args.figure))
 
 
 if __name__ == "__main__":
