@@ -1,4 +1,4 @@
-//! Damaged files give errors, never crashes (issue #23, item 3): a seeded corpus of
+//! Damaged files give errors, never crashes: a seeded corpus of
 //! damaged copies (bit flips, random bytes, zeroed blocks, truncations) of a real study
 //! file, and of the journal and partial file of a killed run. `studyrun inspect`,
 //! `studyrun merge` and `studyrun --resume` on each must exit 0, 1 or 2, with a message

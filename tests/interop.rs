@@ -1,5 +1,5 @@
 //! Study files that netCDF tools rewrote are read, inspected and merged like the
-//! originals (issue #22, item 4). The edits are made here with the HDF5 library the way
+//! originals. The edits are made here with the HDF5 library the way
 //! the tools make them (tests/python/test_netcdf_tools.py runs the tools themselves):
 //! NC_CHAR attributes (`ncatted`: fixed-length, ASCII-typed even for UTF-8 text, a NULL
 //! dataspace when empty), one-element string arrays (`ncatted ... sng`), every attribute
