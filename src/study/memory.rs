@@ -450,7 +450,6 @@ mod tests {
         let repl = MemoryEstimate::of(
             Shape {
                 replicates: 16,
-                revolutions: 0,
                 ..shape
             },
             2,
@@ -460,6 +459,34 @@ mod tests {
         let n = crate::signal::replicates::replicated_metrics().len() as f64;
         let values = 1e6 * (16.0 * n + 3.0 * n + 2.0) * 8.0;
         assert!((repl.case_table - plain.case_table - values).abs() < 1e-6 * values);
+    }
+
+    #[test]
+    fn revolutions_count_their_values_in_the_case_table() {
+        let shape = Shape {
+            samples: 20_001,
+            window: 10_000,
+            spectra: 3,
+            float32: false,
+            cases: 1_000_000,
+            references: 1,
+            design_values: 0,
+            replicates: 0,
+            revolutions: 0,
+            sensor_series: 0,
+        };
+        let plain = MemoryEstimate::of(shape, 2);
+        let revs = MemoryEstimate::of(
+            Shape {
+                revolutions: 10,
+                ..shape
+            },
+            2,
+        );
+        // Six per-revolution metrics, ten values each, per case; nothing else grows.
+        let values = 1e6 * 10.0 * 6.0 * 8.0;
+        assert!((revs.case_table - plain.case_table - values).abs() < 1e-6 * values);
+        assert_eq!(revs.per_case, plain.per_case);
     }
 
     #[test]
