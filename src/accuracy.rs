@@ -477,6 +477,8 @@ pub fn write_file(
         parameters,
         replicates: Vec::new(),
         replicate_metrics: Vec::new(),
+        revolutions: Vec::new(),
+        revolution_metrics: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
         reference_index: vec![0; ms.len()],

@@ -25,6 +25,7 @@ mod integrators;
 mod interop;
 mod isa;
 mod parity;
+mod per_revolution;
 mod properties;
 mod refusals;
 mod replicates;

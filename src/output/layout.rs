@@ -16,6 +16,10 @@ pub const REFERENCE: &str = "reference";
 /// Name of the replicate dimension and its coordinate variable (replicate ids,
 /// int32), present only in a file with [`Layout::replicate_metrics`].
 pub const REPLICATE: &str = "replicate";
+/// Name of the revolution dimension and its coordinate variable (revolution
+/// numbers after the transient, int32), present only in a file with
+/// [`Layout::revolution_metrics`].
+pub const REVOLUTION: &str = "revolution";
 /// Built-in variable `[case]` i8: the [`Status`] code of each case.
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
@@ -31,12 +35,13 @@ pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
 pub(super) const FORMAT_VERSION: i64 = 1;
 
 /// The names no caller variable may take.
-const RESERVED: [&str; 8] = [
+const RESERVED: [&str; 9] = [
     CASE,
     TIME,
     FREQUENCY,
     REFERENCE,
     REPLICATE,
+    REVOLUTION,
     STATUS,
     ERROR_MESSAGE,
     REFERENCE_INDEX,
@@ -227,6 +232,7 @@ pub(super) enum Role {
     Parameter,
     Metric,
     ReplicateMetric,
+    RevolutionMetric,
     Series,
     Spectrum,
     ReferenceParameter,
@@ -234,10 +240,11 @@ pub(super) enum Role {
 }
 
 impl Role {
-    const ALL: [Self; 7] = [
+    const ALL: [Self; 8] = [
         Self::Parameter,
         Self::Metric,
         Self::ReplicateMetric,
+        Self::RevolutionMetric,
         Self::Series,
         Self::Spectrum,
         Self::ReferenceParameter,
@@ -250,6 +257,7 @@ impl Role {
             Self::Parameter => "parameter",
             Self::Metric => "metric",
             Self::ReplicateMetric => "replicate_metric",
+            Self::RevolutionMetric => "revolution_metric",
             Self::Series => "series",
             Self::Spectrum => "spectrum",
             Self::ReferenceParameter => "reference_parameter",
@@ -292,6 +300,12 @@ pub struct Layout {
     /// Per-case, per-replicate results `[case, replicate]`, float64; none without
     /// `replicates`.
     pub replicate_metrics: Vec<VarSpec>,
+    /// Revolution numbers (the `revolution` coordinate, distinct, up to
+    /// [`MAX_ID`]); empty when the file has no revolution dimension.
+    pub revolutions: Vec<u64>,
+    /// Per-case, per-revolution results `[case, revolution]`, float64; none without
+    /// `revolutions`.
+    pub revolution_metrics: Vec<VarSpec>,
     /// Per-case inputs `[case]`, written at creation.
     pub parameters: Vec<Param>,
     /// Per-reference inputs `[reference]`, written at creation.
@@ -391,9 +405,12 @@ impl Layout {
     }
 
     /// Number of metric values a case record holds: one per [`Layout::metrics`],
-    /// then one per replicate for each of [`Layout::replicate_metrics`].
+    /// then one per replicate for each of [`Layout::replicate_metrics`], then one per
+    /// revolution for each of [`Layout::revolution_metrics`].
     pub fn n_metric_values(&self) -> usize {
-        self.metrics.len() + self.replicate_metrics.len() * self.replicates.len()
+        self.metrics.len()
+            + self.replicate_metrics.len() * self.replicates.len()
+            + self.revolution_metrics.len() * self.revolutions.len()
     }
 
     /// Checks the layout; the error says what is wrong and names the variable.
@@ -410,6 +427,13 @@ impl Layout {
             return Err(format!(
                 "`{}` needs the `{REPLICATE}` dimension, which is empty",
                 self.replicate_metrics[0].name
+            ));
+        }
+        distinct(REVOLUTION, &self.revolutions)?;
+        if self.revolutions.is_empty() && !self.revolution_metrics.is_empty() {
+            return Err(format!(
+                "`{}` needs the `{REVOLUTION}` dimension, which is empty",
+                self.revolution_metrics[0].name
             ));
         }
         if self.storage.deflate_level > 9 {
@@ -481,6 +505,7 @@ impl Layout {
             .map(|p| &p.spec)
             .chain(&self.metrics)
             .chain(&self.replicate_metrics)
+            .chain(&self.revolution_metrics)
             .chain(&self.series)
             .chain(&self.spectra)
             .chain(self.reference_parameters.iter().map(|p| &p.spec))
@@ -573,6 +598,8 @@ mod tests {
             metrics: vec![VarSpec::new("x_rms", "m", "rms of x")],
             replicates: vec![],
             replicate_metrics: vec![],
+            revolutions: vec![],
+            revolution_metrics: vec![],
             parameters: vec![Param {
                 spec: VarSpec::new("rpm", "min-1", "crank speed"),
                 values: ParamValues::F64(vec![300.0, 600.0]),

@@ -123,6 +123,8 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 && same_variables(&l.metrics, &first.metrics)
                 && same_variables(&l.replicate_metrics, &first.replicate_metrics)
                 && l.replicates == first.replicates
+                && same_variables(&l.revolution_metrics, &first.revolution_metrics)
+                && l.revolutions == first.revolutions
                 && same_variables(params(l), params(first))
                 && l.reference_ids == first.reference_ids,
             || {
@@ -177,6 +179,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         spectra: Vec<usize>,
         metrics: Vec<usize>,
         replicate_metrics: Vec<usize>,
+        revolution_metrics: Vec<usize>,
         parameters: Vec<usize>,
     }
     let shard_order: Vec<Order> = readers
@@ -190,6 +193,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 spectra: positions(&first.spectra, &l.spectra),
                 metrics: positions(&first.metrics, &l.metrics),
                 replicate_metrics: positions(&first.replicate_metrics, &l.replicate_metrics),
+                revolution_metrics: positions(&first.revolution_metrics, &l.revolution_metrics),
                 parameters: positions(&want, &have),
             }
         })
@@ -272,6 +276,12 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         for &i in &o.replicate_metrics {
             let at = n_scalar + i * n_rep;
             metrics.extend_from_slice(&c.metrics[at..at + n_rep]);
+        }
+        let n_rev = layout.revolutions.len();
+        let after_replicates = n_scalar + o.replicate_metrics.len() * n_rep;
+        for &i in &o.revolution_metrics {
+            let at = after_replicates + i * n_rev;
+            metrics.extend_from_slice(&c.metrics[at..at + n_rev]);
         }
         writer
             .write_case(

@@ -85,8 +85,8 @@ pub use error::StudyFileError;
 pub use inspect::inspect;
 pub use layout::{
     command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
-    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, REPLICATE, STATUS,
-    TIME,
+    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, REPLICATE,
+    REVOLUTION, STATUS, TIME,
 };
 pub use lock::OutputLock;
 pub use merge::merge;

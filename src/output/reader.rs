@@ -12,8 +12,8 @@ use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
-    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR,
-    STATUS, TIME,
+    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION,
+    ROLE_ATTR, STATUS, TIME,
 };
 use super::text::{self, Strings};
 
@@ -25,8 +25,9 @@ pub struct CaseData {
     pub series: Vec<Vec<f64>>,
     /// One vector per [`Layout::spectra`], `frequencies.len()` values each.
     pub spectra: Vec<Vec<f64>>,
-    /// One value per [`Layout::metrics`], then, per [`Layout::replicate_metrics`],
-    /// one per replicate (as [`Record::metrics`](super::Record::metrics)).
+    /// One value per [`Layout::metrics`], then one per replicate for each of
+    /// [`Layout::replicate_metrics`] and one per revolution for each of
+    /// [`Layout::revolution_metrics`] (as [`Record::metrics`](super::Record::metrics)).
     pub metrics: Vec<f64>,
     /// The case's state.
     pub status: Status,
@@ -147,6 +148,12 @@ impl StudyReader {
             row,
         )?;
         metrics.extend(replicates.into_iter().flatten());
+        let revolutions = self.read_rows(
+            &self.rows.revolution_metrics,
+            &self.layout.revolution_metrics,
+            row,
+        )?;
+        metrics.extend(revolutions.into_iter().flatten());
         let message = self.messages[row].clone();
         let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
         Ok(CaseData {
@@ -308,6 +315,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
             Err(_) => Vec::new(),
         },
         replicate_metrics: Vec::new(),
+        revolutions: match file.dataset(REVOLUTION) {
+            Ok(_) => read_ids(file, REVOLUTION, path)?,
+            Err(_) => Vec::new(),
+        },
+        revolution_metrics: Vec::new(),
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
@@ -341,6 +353,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         let (rows, cols) = match role {
             Role::Parameter | Role::Metric => (layout.n_cases(), None),
             Role::ReplicateMetric => (layout.n_cases(), Some(layout.replicates.len())),
+            Role::RevolutionMetric => (layout.n_cases(), Some(layout.revolutions.len())),
             Role::Series => (layout.n_cases(), Some(layout.times.len())),
             Role::Spectrum => (layout.n_cases(), Some(layout.frequencies.len())),
             Role::ReferenceParameter => (layout.n_references(), None),
@@ -360,11 +373,13 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
                 .push(read_param(&ds, spec, path)?),
             Role::Metric => layout.metrics.push(spec),
             Role::ReplicateMetric => layout.replicate_metrics.push(spec),
+            Role::RevolutionMetric => layout.revolution_metrics.push(spec),
             Role::Series => layout.series.push(spec),
             Role::Spectrum => layout.spectra.push(spec),
             Role::ReferenceSeries => layout.reference_series.push(spec),
         }
-        if cols.is_some() && role != Role::ReplicateMetric && storage_from.is_none() {
+        let contiguous = matches!(role, Role::ReplicateMetric | Role::RevolutionMetric);
+        if cols.is_some() && !contiguous && storage_from.is_none() {
             storage_from = Some(ds);
         }
     }

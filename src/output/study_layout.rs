@@ -5,6 +5,7 @@ use crate::mechanism::CaseParams;
 use crate::output::{provenance, AttrValue, Layout, Param, ParamValues, Storage, VarSpec};
 use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
 use crate::signal::replicates::{chaos_specs, replicate_metric_specs, summary_specs};
+use crate::signal::revolutions::revolution_metric_specs;
 use crate::signal::spectrum::frequencies;
 use crate::signal::{envelope_spectrum_specs, metric_specs};
 use crate::simulate::CHANNELS;
@@ -250,6 +251,12 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             .map_or(Vec::new(), |r| (0..r.count as u64).collect()),
         replicate_metrics: if study.replicates.is_some() {
             replicate_metric_specs()
+        } else {
+            Vec::new()
+        },
+        revolutions: (0..study.revolutions as u64).collect(),
+        revolution_metrics: if study.revolutions > 0 {
+            revolution_metric_specs()
         } else {
             Vec::new()
         },

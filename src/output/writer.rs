@@ -15,7 +15,8 @@ use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
-    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, ROLE_ATTR, STATUS, TIME,
+    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION, ROLE_ATTR,
+    STATUS, TIME,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
@@ -36,7 +37,8 @@ pub struct Record<'a, Row: ?Sized> {
     /// One row per [`Layout::spectra`], `frequencies.len()` values each.
     pub spectra: &'a [&'a Row],
     /// One value per [`Layout::metrics`], then, per
-    /// [`Layout::replicate_metrics`], one per replicate
+    /// [`Layout::replicate_metrics`], one per replicate, then, per
+    /// [`Layout::revolution_metrics`], one per revolution
     /// ([`Layout::n_metric_values`] in all).
     pub metrics: &'a [f64],
     /// The case's state.
@@ -125,12 +127,13 @@ pub struct StudyWriter {
 /// entries: their size on disk).
 const METADATA_CACHE_BYTES: usize = 512 * 1024;
 
-/// The `[case]` scalars and `[case, replicate]` metrics of every row, written whole
-/// by [`Scalars::write`].
+/// The `[case]` scalars and `[case, replicate]` and `[case, revolution]` metrics of
+/// every row, written whole by [`Scalars::write`].
 struct Scalars {
     path: PathBuf,
-    /// Per metric, then per replicate metric: its dataset, its values in row-major
-    /// order, and the values per case (1, or the number of replicates).
+    /// Per metric, then per replicate and per revolution metric: its dataset, its
+    /// values in row-major order, and the values per case (1, or the number of
+    /// replicates or revolutions).
     metrics: Vec<(Dataset, Vec<f64>, usize)>,
     status: (Dataset, Vec<i8>),
     messages: (Dataset, Vec<String>),
@@ -152,6 +155,12 @@ impl Scalars {
                     .iter()
                     .zip(&layout.replicate_metrics)
                     .map(|m| (m, n_replicates)),
+            )
+            .chain(
+                rows.revolution_metrics
+                    .iter()
+                    .zip(&layout.revolution_metrics)
+                    .map(|m| (m, layout.revolutions.len())),
             )
             .map(|((ds, spec), width)| {
                 Ok((
@@ -396,11 +405,14 @@ impl StudyWriter {
             return Err(self.record_error(
                 "metrics",
                 format!(
-                    "{} values for {} metrics and {} replicate metrics x {} replicates",
+                    "{} values for {} metrics, {} replicate metrics x {} replicates and \
+                     {} revolution metrics x {} revolutions",
                     record.metrics.len(),
                     self.layout.metrics.len(),
                     self.layout.replicate_metrics.len(),
                     self.layout.replicates.len(),
+                    self.layout.revolution_metrics.len(),
+                    self.layout.revolutions.len(),
                 ),
             ));
         }
@@ -600,23 +612,38 @@ impl Creator<'_> {
             self.finish_var(&ds, spec, Some(Role::Metric), &[&case])?;
             fill_attr(&ds, false).at(self.path, &spec.name)?;
         }
-        if !l.replicates.is_empty() {
-            let replicate = self.coordinate(
+        let mut dimid = COORDINATES.len();
+        for (name, ids, meta, specs, role) in [
+            (
                 REPLICATE,
-                &ids32(&l.replicates),
+                &l.replicates,
                 ("1", "replicate id (0: the case unperturbed)"),
-                COORDINATES.len(),
-            )?;
-            for spec in &l.replicate_metrics {
+                &l.replicate_metrics,
+                Role::ReplicateMetric,
+            ),
+            (
+                REVOLUTION,
+                &l.revolutions,
+                ("1", "whole crank revolution after the transient"),
+                &l.revolution_metrics,
+                Role::RevolutionMetric,
+            ),
+        ] {
+            if ids.is_empty() {
+                continue;
+            }
+            let dim = self.coordinate(name, &ids32(ids), meta, dimid)?;
+            dimid += 1;
+            for spec in specs {
                 // Contiguous: written whole, like the `[case]` metrics.
                 let ds = self
                     .file
                     .new_dataset::<f64>()
                     .fill_value(f64::NAN)
-                    .shape([l.n_cases(), l.replicates.len()])
+                    .shape([l.n_cases(), ids.len()])
                     .create(spec.name.as_str())
                     .at(self.path, &spec.name)?;
-                self.finish_var(&ds, spec, Some(Role::ReplicateMetric), &[&case, &replicate])?;
+                self.finish_var(&ds, spec, Some(role), &[&case, &dim])?;
                 fill_attr(&ds, false).at(self.path, &spec.name)?;
             }
         }

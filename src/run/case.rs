@@ -5,6 +5,7 @@ use crate::mechanism::{CaseParams, Location};
 use crate::output::study_metric_specs;
 use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
+use crate::signal::revolutions::{revolution_metric_specs, revolution_metrics, revolution_windows};
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
 use crate::simulate::{channel_index, simulate, simulate_perturbed, CaseOutput};
@@ -25,7 +26,9 @@ pub(crate) struct CaseResult {
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
     /// One value per [`study_metric_specs`] entry, then per [`replicated_metrics`]
-    /// entry one per replicate (NaN where unknown): the file's
+    /// entry one per replicate (NaN where unknown), then per
+    /// [`revolution_metric_specs`] entry one per study revolution (NaN past the
+    /// case's last whole revolution): the file's
     /// [`Record::metrics`](crate::output::Record::metrics).
     pub metrics: Vec<f64>,
     /// What computing the case cost (not stored in the file or the journal).
@@ -44,7 +47,8 @@ pub(crate) struct CaseCost {
 /// Simulates `case` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed), the envelope analysis when
 /// the study has one (`envelope`, planned for it) and the series of the study's
-/// sensors (docs/model.md §7.8); with replicates, runs its perturbed replicates one
+/// sensors (docs/model.md §7.8) and the metrics per whole crank revolution
+/// (docs/model.md §6.1); with replicates, runs its perturbed replicates one
 /// after the other and adds their metrics, statistics and predictability horizon
 /// (docs/model.md §9.5). Never fails: a failure of the case (replicate 0) becomes a
 /// [`Status::Failed`] result with its message; a failed perturbed replicate only
@@ -61,7 +65,8 @@ pub(crate) fn run_case(
     let cpu_start = thread_cpu();
     let n_metrics = metric_specs(study.envelope.as_ref()).len();
     let n_values = study_metric_specs(study).len()
-        + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len();
+        + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len()
+        + study.revolutions * revolution_metric_specs().len();
     let params = &case.params;
     let simulated = simulate(params, &study.solver, &study.sampling);
     let cpu_simulated = thread_cpu();
@@ -106,6 +111,11 @@ pub(crate) fn run_case(
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
     };
+    // The per-revolution metrics reread the samples already analysed (docs/model.md §6.1).
+    let per_revolution = (study.revolutions > 0).then(|| {
+        let windows = revolution_windows(&params.drive(), &study.sampling, study.transient);
+        revolution_metrics(&out, reference, &windows, study.revolutions)
+    });
     cost.analysis = thread_cpu() - cpu_simulated;
     let replicates = study
         .replicates
@@ -130,6 +140,7 @@ pub(crate) fn run_case(
         }
         metrics.extend(r.values);
     }
+    metrics.extend(per_revolution.into_iter().flatten());
     debug_assert_eq!(metrics.len(), n_values);
     CaseResult {
         row,

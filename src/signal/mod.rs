@@ -8,6 +8,7 @@ pub mod fault_frequencies;
 pub mod indicators;
 pub mod metrics;
 pub mod replicates;
+pub mod revolutions;
 pub mod sensor;
 pub mod spectrum;
 

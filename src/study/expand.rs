@@ -24,6 +24,7 @@ use crate::bearing::{
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
 use crate::output::study_layout;
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
+use crate::signal::revolutions::revolution_count;
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL};
@@ -474,6 +475,11 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
+    let revolutions = cases
+        .iter()
+        .map(|c| revolution_count(&c.params.drive(), transient, sampling.duration))
+        .max()
+        .unwrap_or(0);
     let mut study = Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
@@ -494,6 +500,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         design: sampled.map(|d| d.info),
         replicates,
         chaos_check,
+        revolutions,
         sensors: Vec::new(),
     };
     if let Some(list) = &file.sensors {
@@ -716,6 +723,8 @@ fn check_study_memory(
             .replicates
             .as_ref()
             .map_or(0, |r| r.value.count.value.min(replicates::MAX_REPLICATES)),
+        // Known once the cases' speeds are: counted by `Study::memory_estimate`.
+        revolutions: 0,
     };
     check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
 }

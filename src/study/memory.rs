@@ -59,6 +59,12 @@ fn replicate_values(replicates: u64) -> u64 {
     replicates * metrics + 3 * metrics + 2
 }
 
+/// Values the writer holds per case for `revolutions` revolutions: each
+/// per-revolution metric per revolution.
+fn revolution_values(revolutions: u64) -> u64 {
+    revolutions * crate::signal::revolutions::revolution_metric_specs().len() as u64
+}
+
 /// Bytes one case takes in the case table of a run: its parameters (with the
 /// waviness harmonics on the heap), their copy in the file's layout (one f64 per
 /// parameter, the location label, case id and reference index), the copies the file
@@ -95,6 +101,8 @@ pub struct Shape {
     pub design_values: u64,
     /// Runs per case with `replicates:` (0 without).
     pub replicates: u64,
+    /// Length of the `revolution` dimension (most whole revolutions of a case).
+    pub revolutions: u64,
 }
 
 /// The memory a run of a study needs at its peak, by part (bytes).
@@ -152,7 +160,10 @@ impl MemoryEstimate {
         // The references have the simulated channels only.
         let references = shape.references as f64 * (simulated + 1.0) * n * 8.0;
         let case_table = shape.cases as f64
-            * (case_table_bytes() + replicate_values(shape.replicates) as f64 * 8.0)
+            * (case_table_bytes()
+                + (replicate_values(shape.replicates) + revolution_values(shape.revolutions))
+                    as f64
+                    * 8.0)
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
@@ -432,6 +443,7 @@ mod tests {
             references: 1,
             design_values: 0,
             replicates: 0,
+            revolutions: 0,
             sensor_series: 0,
         };
         let plain = MemoryEstimate::of(shape, 2);
@@ -450,6 +462,34 @@ mod tests {
     }
 
     #[test]
+    fn revolutions_count_their_values_in_the_case_table() {
+        let shape = Shape {
+            samples: 20_001,
+            window: 10_000,
+            spectra: 3,
+            float32: false,
+            cases: 1_000_000,
+            references: 1,
+            design_values: 0,
+            replicates: 0,
+            revolutions: 0,
+            sensor_series: 0,
+        };
+        let plain = MemoryEstimate::of(shape, 2);
+        let revs = MemoryEstimate::of(
+            Shape {
+                revolutions: 10,
+                ..shape
+            },
+            2,
+        );
+        // Six per-revolution metrics, ten values each, per case; nothing else grows.
+        let values = 1e6 * 10.0 * 6.0 * 8.0;
+        assert!((revs.case_table - plain.case_table - values).abs() < 1e-6 * values);
+        assert_eq!(revs.per_case, plain.per_case);
+    }
+
+    #[test]
     fn a_billion_samples_need_far_more_than_a_terabyte_of_nothing() {
         let shape = Shape {
             samples: 1_000_000_001,
@@ -461,6 +501,7 @@ mod tests {
             references: 1,
             design_values: 0,
             replicates: 0,
+            revolutions: 0,
         };
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
@@ -477,6 +518,7 @@ mod tests {
                 references: 1,
                 design_values: 0,
                 replicates: 0,
+                revolutions: 0,
             },
             2,
         );
@@ -496,6 +538,7 @@ mod tests {
             references: 2,
             design_values: 0,
             replicates: 0,
+            revolutions: 0,
         };
         let (without, with) = (
             MemoryEstimate::of(shape(0), 2),

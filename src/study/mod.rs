@@ -120,6 +120,9 @@ pub struct Study {
     pub replicates: Option<Replicates>,
     /// Whether each case's predictability horizon is computed from its replicates.
     pub chaos_check: bool,
+    /// The most whole crank revolutions any case has in the analysed window: the
+    /// length of the file's `revolution` dimension (docs/model.md §6.1).
+    pub revolutions: usize,
 }
 
 /// A study's `replicates:`: every case runs `count` times, replicate `k ≥ 1` from
@@ -230,6 +233,7 @@ impl Study {
                     .as_ref()
                     .map_or(0, |d| d.rows * d.parameters.len() as u64),
                 replicates: self.replicates.map_or(0, |r| r.count as u64),
+                revolutions: self.revolutions as u64,
             },
             jobs,
         )
