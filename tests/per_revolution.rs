@@ -11,20 +11,12 @@ use studyrun::signal::metrics::Deviation;
 use studyrun::signal::revolutions::revolution_metric_specs;
 use studyrun::study::Study;
 
-use crate::cli::{assert_same_data, studyrun, write};
+use crate::cli::{assert_same_data, write};
+use crate::common::studyrun_ok as ok;
 
 /// 300 and 600 rpm over 0.2 s ≤ t < 0.6 s: two and four whole revolutions, 2000 and
 /// 1000 samples each.
 const GRID: &str = "name: revs\nduration: 0.6\nsample_rate: 10000\ntransient: \"0.2 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  rpm: [300, 600]\n";
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = studyrun(dir, args);
-    assert!(
-        out.status.success(),
-        "studyrun {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 /// The `[case, revolution]` values of `name` for file row `row`.
 fn per_revolution(r: &StudyReader, row: usize, name: &str) -> Vec<f64> {

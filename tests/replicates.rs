@@ -10,22 +10,14 @@ use studyrun::signal::metric_specs;
 use studyrun::signal::replicates::{replicated_metrics, Summary};
 use studyrun::study::Study;
 
-use crate::cli::{assert_same_data, kill_when_journal_passes, studyrun, write};
+use crate::cli::{assert_same_data, kill_when_journal_passes, write};
+use crate::common::studyrun_ok as ok;
 
 /// The paper's bearing and solver (studies/paper.yaml) over 0.4 s at 300 rpm.
 const PAPER: &str = "name: paper_replicates\nduration: 0.4\nsample_rate: 50000\neffects: [clearance, waviness, damping]\nbearing:\n  clearance: \"40 um\"\n  stiffness: 9.57e9\n  damping: 300\n  waviness:\n    number: 35\n    amplitude: \"4 um\"\nsolver:\n  method: dop853\n  rtol: 1e-8\n  atol: 1e-12\nrpm: 300\n";
 
 /// A 12-case study of 50 ms.
 const SMALL: &str = "name: small\nduration: 0.05\nsample_rate: 10000\ntransient: \"0.01 s\"\ngrid:\n  location: [crank_ground, crank_rod]\n  waviness_amplitude: [\"0 um\", \"4 um\"]\n  ball_count: [8, 9, 11]\n  rpm: [600]\n";
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = studyrun(dir, args);
-    assert!(
-        out.status.success(),
-        "studyrun {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 /// Replicate 0 starts unperturbed: with `replicates:` a study's series, spectra and
 /// metrics are the bits of the same study without, and its `<metric>_replicates`

@@ -431,10 +431,9 @@ mod tests {
         assert!(parse_size("0").is_err());
     }
 
-    /// Replicates add a second set of series per worker and their values per case.
-    #[test]
-    fn replicates_count_their_series_and_values() {
-        let shape = Shape {
+    /// A million cases of 20 001 samples, no options.
+    fn million_short_cases() -> Shape {
+        Shape {
             samples: 20_001,
             window: 10_000,
             spectra: 3,
@@ -445,7 +444,13 @@ mod tests {
             replicates: 0,
             revolutions: 0,
             sensor_series: 0,
-        };
+        }
+    }
+
+    /// Replicates add a second set of series per worker and their values per case.
+    #[test]
+    fn replicates_count_their_series_and_values() {
+        let shape = million_short_cases();
         let plain = MemoryEstimate::of(shape, 2);
         let repl = MemoryEstimate::of(
             Shape {
@@ -463,18 +468,7 @@ mod tests {
 
     #[test]
     fn revolutions_count_their_values_in_the_case_table() {
-        let shape = Shape {
-            samples: 20_001,
-            window: 10_000,
-            spectra: 3,
-            float32: false,
-            cases: 1_000_000,
-            references: 1,
-            design_values: 0,
-            replicates: 0,
-            revolutions: 0,
-            sensor_series: 0,
-        };
+        let shape = million_short_cases();
         let plain = MemoryEstimate::of(shape, 2);
         let revs = MemoryEstimate::of(
             Shape {
