@@ -293,6 +293,23 @@ mod tests {
     use super::*;
     use crate::mechanism::CartesianSliderCrank;
 
+    /// The largest |difference| of two runs' slider accelerations (m/s²) and the
+    /// range of the second's.
+    fn slider_difference(a: &CaseOutput, b: &CaseOutput) -> (f64, f64) {
+        let (a, b) = (
+            a.channel("slider_acceleration").unwrap(),
+            b.channel("slider_acceleration").unwrap(),
+        );
+        let range = b.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
+            - b.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+        let worst = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        (worst, range)
+    }
+
     /// Both formulations run through the one seam: at crank_rod over 30 ms (through
     /// the first contacts), tightly integrated, their slider accelerations agree to
     /// 1e-6 of the channel's range.
@@ -318,17 +335,7 @@ mod tests {
             &sampling,
         )
         .unwrap();
-        let (a, b) = (
-            minimal.channel("slider_acceleration").unwrap(),
-            cartesian.channel("slider_acceleration").unwrap(),
-        );
-        let range = b.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
-            - b.iter().fold(f64::INFINITY, |m, &x| m.min(x));
-        let worst = a
-            .iter()
-            .zip(b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max);
+        let (worst, range) = slider_difference(&minimal, &cartesian);
         assert!(worst < 1e-6 * range, "worst {worst:e} of range {range:e}");
     }
 
@@ -366,17 +373,7 @@ mod tests {
             if location == Location::CrankRod {
                 continue;
             }
-            let (a, b) = (
-                minimal.channel("slider_acceleration").unwrap(),
-                cartesian.channel("slider_acceleration").unwrap(),
-            );
-            let range = b.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
-                - b.iter().fold(f64::INFINITY, |m, &x| m.min(x));
-            let worst = a
-                .iter()
-                .zip(b)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
+            let (worst, range) = slider_difference(&minimal, &cartesian);
             assert!(worst < 1e-6 * range, "{location:?}: {worst:e} of {range:e}");
         }
     }
