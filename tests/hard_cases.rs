@@ -24,7 +24,7 @@
 //!   `|e| ≤ (P_d/2 + ΣΠ + δ_max) / cos(π/N_b)` (ΣΠ: all waviness amplitudes of both
 //!   races), with `δ_max` from (a) the bearing's Hertz potential at that sample
 //!   (rigorous, always), (b) the instantaneous |F| (where rigorous: P_d/2 ≥ ΣΠ and
-//!   compression-only damping) and (c) the largest |F| of the run, the brief's
+//!   compression-only damping) and (c) the largest |F| of the run, the
 //!   single-ball bound `(max|F|/K)^{2/3}`. The factor `1/cos(π/N_b)` is geometry:
 //!   a journal heading between two balls travels further than P_d/2 before touching
 //!   them (with 3 balls, P_d). Without it the 3-ball case breaks the bound (measured

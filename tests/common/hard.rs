@@ -371,7 +371,7 @@ pub fn energy_residuals(run: &Run) -> Vec<f64> {
 ///     forces `≥ K δ^{3/2}`, i.e. compression-only damping or C = 0): then every
 ///     loaded ball has `n_r·e > 0`, so `|F| ≥ F·ê ≥ K δ_b^{3/2} cos(π/N_b)` and
 ///     `δ_b ≤ (|F(t)| / (K cos(π/N_b)))^{2/3}`;
-///   - *run-max force* (the single-ball bound of the brief, with the spacing
+///   - *run-max force* (the single-ball bound, with the spacing
 ///     factor; asserted when `limits.run_max_force_bound`): `δ_b ≤ (max|F|/K)^{2/3}`
 ///     with the largest |F| of the run. Not rigorous under preload or waviness
 ///     beyond `P_d/2`, where balls on opposite sides push against each other and |F|
