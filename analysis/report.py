@@ -174,10 +174,15 @@ def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
                    "no time-series panels or spectra.")
         return
     groups = panel_groups(ds, cases)
+    profiled = [params for params, _ in groups if not np.isfinite(params["rpm"])]
+    if profiled:
+        index.note(f"{len(profiled)} combinations run a `speed:` profile (no constant `rpm`): no panels or "
+                   "spectra here; the diagnosis section shows them.")
+        groups = [(params, counts) for params, counts in groups if np.isfinite(params["rpm"])]
     if len(groups) > max_groups:
         index.note(f"{len(groups)} parameter combinations; the first {max_groups} are shown "
                    "(raise --max-groups or narrow with --select).")
-    if all(len(counts) == 1 for _, counts in groups):
+    if groups and all(len(counts) == 1 for _, counts in groups):
         index.note("The study has one ball count per combination: one panel per figure.")
     for params, counts in groups[:max_groups]:
         render_group(ds, params, counts, outdir, index, channels, dpi)
