@@ -140,7 +140,8 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
 def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=None, dpi=90):
     """STFT of a stored `series` over the analysed window, one panel per
     {label: case}: amplitude (file convention, dB re its largest) against time and
-    frequency, segments of `segment` samples (default about 0.1 s) every segment/4.
+    frequency, segments of `segment` samples (default about 0.1 s, at most a quarter of
+    the window) every segment/4.
     With `demodulate` (and a band stored for the case, `<series>_envelope_band_low/
     _high`) the STFT is that of the squared envelope of the band (docs/model.md §7.4,
     mean removed) up to `f_max` (default 2.2 × the fastest BPFI): the fault lines, which
@@ -148,7 +149,9 @@ def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=Non
     2·BSF; for `none` BPFO). Else the raw series up to `f_max` (default f_s/2)."""
     _need(ds, series)
     fs = float(ds.attrs["sample_rate"])
-    segment = segment or 1 << round(math.log2(0.1 * fs))
+    if segment is None:
+        n = int(diagnosis.analysis_window(ds).sum())
+        segment = 1 << min(round(math.log2(0.1 * fs)), int(math.log2(max(n // 4, 2))))
     demodulate = demodulate and f"{series}_envelope_band_low" in ds
     fig, axes = _panels(len(cases), width=5.2, height=3.2)
     for ax, (label, case) in zip(axes, cases.items()):

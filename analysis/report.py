@@ -212,7 +212,8 @@ def conditions(ds, cases):
         axes.insert(0, "location")
     out, dropped = {}, 0
     for case in cases:
-        place = [figures.value_text(ds, a, ds[a].values[case]) for a in axes]
+        place = [(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
+                 + figures.value_text(ds, a, ds[a].values[case]) for a in axes]
         group = out.setdefault(", ".join(place + [speed_text(ds, case)]), {})
         label = dfig._fault(ds, case)
         if label in group:
@@ -346,7 +347,7 @@ def render_indicators(ds, cases, channels, outdir, index, dpi):
 
 
 def slug_text(text):
-    """A file-name fragment of a condition's text, e.g. crank_ground_run-up_300-900rpm."""
+    """A file-name fragment of a condition's text, e.g. crank_ground_N_b8_run-up300-900rpm."""
     out = text.replace("→", "-").replace("±", "pm").replace("µ", "u").replace(", ", "_").replace(" ", "")
     return out.replace("/", "-")
 

@@ -56,7 +56,8 @@ def test_command_line_on_the_smoke_study(smoke_path, tmp_path, assert_png):
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == str(outdir / "index.md")
-    index, images = check_index(outdir, assert_png)
+    index, _ = check_index(outdir, assert_png)
+    images = linked_images(index.split("## Diagnosis")[0])
     assert "# Study `smoke`" in index and "10 ok" not in index and "12 ok, 0 failed, 4 ideal" in index
     assert sum(name.startswith("metrics_") for name in images) == 6
     panels = sorted(name for name in images if name.startswith("panels_"))
@@ -64,6 +65,10 @@ def test_command_line_on_the_smoke_study(smoke_path, tmp_path, assert_png):
                       for loc in ("crank_ground", "crank_rod") for a in (0, 4)]
     assert sum(name.startswith("spectrum_") for name in images) == 4
     assert "not shown" not in index
+    section = diagnosis_section(index)  # the orbits of 8 conditions, the first one's spectrogram
+    assert linked_images(section) == ["orbit_0.png", "orbit_1.png",
+                                      "spectrogram_bearing_force_crank_ground_waviness0um_N_b8_600rpm.png"]
+    assert "no `envelope:`" in section and "no order spectra" in section
 
 
 def test_one_ball_count_and_no_grid_axis_left(smoke_path, tmp_path, assert_png):
@@ -75,7 +80,9 @@ def test_one_ball_count_and_no_grid_axis_left(smoke_path, tmp_path, assert_png):
     index, images = check_index(tmp_path, assert_png)
     assert "No grid axis varies among the bearing cases" in index
     assert "one ball count per combination" in index
-    assert sorted(images) == ["panels_crank_moment_crank_rod_600rpm_4um.png",
+    assert sorted(images) == ["orbit_0.png",
+                              "panels_crank_moment_crank_rod_600rpm_4um.png",
+                              "spectrogram_bearing_force_600rpm.png",
                               "spectrum_crank_moment_crank_rod_600rpm_4um.png"]
 
 
@@ -260,9 +267,10 @@ def test_indicators_over_two_grid_axes(diagnosis, drawn, tmp_path):
     defects = diagnosis.isel(case=(diagnosis["fault"] != "none").values)
     path = tmp_path / "defects.h5"
     defects.to_netcdf(path, engine="h5netcdf")
-    report.report(path, tmp_path / "out", channels=["crank_moment"], dpi=50)
-    index = (tmp_path / "out" / "index.md").read_text(encoding="utf-8")
-    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed_from" in index
+    with report.open_study(path) as ds:
+        index = report.Index("defects")
+        report.render_indicators(ds, report.bearing_cases(ds), ["bearing_force"], tmp_path, index, 50)
+    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed_from" in "\n".join(index.lines)
     ax = drawn[-1].axes[0]
     assert ax.get_title() == "bearing_force_rms (N)"
     assert [t.get_text() for t in ax.get_xticklabels()] == ["outer", "inner", "ball"]
