@@ -48,7 +48,7 @@ def _need(ds, *names):
             raise ValueError(f"the study has no {name}")
 
 
-def _fault(ds, case):
+def fault_label(ds, case):
     """The case's fault label (`none` without the `fault` variable)."""
     return diagnosis.text(ds["fault"].values[case]) if "fault" in ds else HEALTHY
 
@@ -315,7 +315,7 @@ def kurtogram(ds, series, case, out, dpi=90):
     ax.set_ylim(len(levels) - 0.5, -0.5)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("level (bands of f_s / 2^(level+1))")
-    ax.set_title(f"Fast kurtogram of {series}, case {int(ds['case'].values[case])} ({_fault(ds, case)})", fontsize=10)
+    ax.set_title(f"Fast kurtogram of {series}, case {int(ds['case'].values[case])} ({fault_label(ds, case)})", fontsize=10)
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(mesh, ax=ax, label="kurtosis of the complex envelope <|z|⁴>/<|z|²>² − 2")
     fig.tight_layout()

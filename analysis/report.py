@@ -6,9 +6,12 @@ them, one caption line each.
 Metrics views (heatmaps over the grid axes), then for every combination of bearing
 location, speed, waviness amplitude (and any other grid axis) the time-series
 panels per ball count with the ideal mechanism, and the amplitude spectra with the
-bearing's characteristic frequencies. What a study cannot show (no bearing cases,
-no grid axis that varies, cases not told apart by the grid) is skipped and said so
-in the index.
+bearing's characteristic frequencies. Then the diagnosis figures (docs/diagnosis.md):
+the journal centre's orbits, envelope spectra with the fault lines per fault label, a
+spectrogram, a waterfall over the crank speed, order spectra of run-ups, the fast
+kurtogram and heatmaps of the condition indicators. What a study cannot show (no
+bearing cases, no grid axis that varies, cases not told apart by the grid, no
+`envelope:`, no varying speed) is skipped and said so in the index.
 """
 
 import argparse
@@ -215,7 +218,7 @@ def conditions(ds, cases):
         place = [(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
                  + figures.value_text(ds, a, ds[a].values[case]) for a in axes]
         group = out.setdefault(", ".join(place + [speed_text(ds, case)]), {})
-        label = dfig._fault(ds, case)
+        label = dfig.fault_label(ds, case)
         if label in group:
             dropped += 1
         else:
@@ -281,10 +284,10 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
     if not varying:
         index.note("No run-up or other varying speed: the spectrogram of the first condition only, no order spectra.")
 
+    speeds = {diagnosis.constant_rpm(ds, c) for g in constant for c in groups[g].values()}
     for channel in channels:
-        speeds = {diagnosis.constant_rpm(ds, c) for g in names for c in groups[g].values()}
-        if len(speeds) < 2:
-            index.note(f"{channel}: one speed only: no waterfall over the crank speed.")
+        if len(speeds) < 2 and not varying:
+            index.note(f"{channel}: one constant speed only: no waterfall over the crank speed.")
             continue
         by_fault = {}
         for name in names:
@@ -328,7 +331,7 @@ def render_indicators(ds, cases, channels, outdir, index, dpi):
         pairs.append(((figures.PARAMETER_TEXT.get(x_axis, x_axis), label(x_axis)),
                       (figures.PARAMETER_TEXT.get(y_axis, y_axis), label(y_axis))))
     condition = {case: name for name, g in conditions(sub, all_cases)[0].items() for case in g.values()}
-    pairs.append((("fault", [dfig._fault(sub, c) for c in all_cases]),
+    pairs.append((("fault", [dfig.fault_label(sub, c) for c in all_cases]),
                   ("condition", [condition.get(c, "(repeated)") for c in all_cases])))
     for channel in channels:
         names = [f"{channel}_{i}" for i in INDICATORS if f"{channel}_{i}" in ds]
