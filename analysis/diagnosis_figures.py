@@ -94,28 +94,44 @@ def _line_frequencies(ds, case):
     return {k: order * f_shaft for k, order in diagnosis.fault_orders(ds, case).lines().items()}, f_shaft
 
 
-def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
-    """The stored `<channel>_envelope_spectrum` of constant-speed cases, one panel per
-    {label: case} (labels are fault labels: none, outer, inner, ball), on a log scale
-    up to `f_max` (Hz; default 2.2 × the largest line), on a linear scale, the
-    healthy case (label `none`) grey behind the others (its peak in the legend). Marked: the first harmonics of FTF, BPFO, BPFI,
-    BSF and 2·BSF (docs/model.md §7.3), and around the panel's fault line (BPFO,
-    BPFI, 2·BSF) its shaft sidebands ±k·f_shaft, k = 1..sidebands, f_shaft = rpm/60."""
+def case_envelope(ds, channel, case):
+    """(frequencies in Hz, envelope amplitudes, (low, high) band in Hz, stored?) of one
+    case: the file's `<channel>_envelope_spectrum` and band where it has them, else the
+    envelope spectrum (docs/model.md §7.4) of the stored series `channel` in the band
+    of its fast kurtogram (§7.6), both recomputed here, e.g. for a sensor's series."""
     name = f"{channel}_envelope_spectrum"
-    _need(ds, name)
-    freq = ds["frequency"].values
-    units = unit_text(ds, name)
+    if name in ds:
+        band = tuple(float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+        return ds["frequency"].values, ds[name].values[case], band, True
+    _need(ds, channel)
+    fs = float(ds.attrs["sample_rate"])
+    _, x = diagnosis.window_series(ds, channel, case)
+    band = diagnosis.kurtogram(x, fs).band
+    freq, amplitude = diagnosis.envelope_spectrum(x, fs, *band)
+    return freq, amplitude, band, False
+
+
+def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
+    """Envelope spectra of `channel` at constant speeds (`case_envelope`: the file's, or
+    recomputed from the series in its kurtogram's band), one panel per {label: case}
+    (labels are fault labels: none, outer, inner, ball), on a linear scale up to
+    `f_max` (Hz; default 2.2 × the largest line), the healthy case (label `none`) grey
+    behind the others (its peak in the legend). Marked: the first harmonics of FTF,
+    BPFO, BPFI, BSF and 2·BSF (docs/model.md §7.3), and around the panel's fault line
+    (BPFO, BPFI, 2·BSF) its shaft sidebands ±k·f_shaft, k = 1..sidebands, f_shaft = rpm/60."""
     healthy = cases.get(HEALTHY)
+    calm = case_envelope(ds, channel, healthy) if healthy is not None else None
     fig, axes = _panels(len(cases))
     for ax, (label, case) in zip(axes, cases.items()):
         lines, f_shaft = _line_frequencies(ds, case)
+        freq, spectrum, (low, high), stored = calm if case == healthy else case_envelope(ds, channel, case)
         top = f_max or 2.2 * max(lines.values())
         band = (freq > 0) & (freq <= top)
-        if healthy is not None and healthy != case:
-            calm = ds[name].values[healthy][band]
-            ax.plot(freq[band], calm, color="0.6", lw=0.8, label=f"none (healthy), peak {calm.max():.2g}")
-        spectrum = ds[name].values[case][band]
-        ax.plot(freq[band], spectrum, color="k", lw=0.9, label=label)
+        if calm is not None and healthy != case:
+            keep = (calm[0] > 0) & (calm[0] <= top)
+            ax.plot(calm[0][keep], calm[1][keep], color="0.6", lw=0.8,
+                    label=f"none (healthy), peak {calm[1][keep].max():.2g}")
+        ax.plot(freq[band], spectrum[band], color="k", lw=0.9, label=label)
         for line, f in lines.items():
             ax.axvline(f, color=LINE_COLOURS[line], ls="--", lw=0.9, label=f"{line} {f:.1f} Hz")
         own = diagnosis.FAULT_LINE.get(label)
@@ -124,12 +140,12 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
                 for sign in (-1, 1):
                     ax.axvline(lines[own] + sign * k * f_shaft, color=LINE_COLOURS[own], ls=":", lw=0.8,
                                label=f"{own} ± k·f_shaft, k ≤ {sidebands}" if (k, sign) == (1, 1) else None)
-        low, high = (float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
-        ax.set_title(f"{label}: band {low:g}–{high:g} Hz, f_shaft = {f_shaft:g} Hz", fontsize=9)
+        source = "band" if stored else "recomputed kurtogram's band"
+        ax.set_title(f"{label}: {source} {low:g}–{high:g} Hz, f_shaft = {f_shaft:g} Hz", fontsize=9)
         ax.set_xlim(0, top)
-        ax.set_ylim(0, 1.6 * np.nanmax(spectrum))  # room for the legend above the lines
+        ax.set_ylim(0, 1.6 * np.nanmax(spectrum[band]))  # room for the legend above the lines
         ax.set_xlabel("frequency (Hz)")
-        ax.set_ylabel(f"envelope amplitude ({units})")
+        ax.set_ylabel(f"envelope amplitude ({unit_text(ds, channel)}²)")
         ax.grid(alpha=0.3, lw=0.4)
         ax.legend(fontsize=6, loc="upper right", ncol=2)
     fig.suptitle(f"Envelope spectra of {channel}", fontsize=11)

@@ -231,6 +231,11 @@ def envelope_channels(ds):
     return [str(n)[: -len("_envelope_spectrum")] for n in ds.data_vars if str(n).endswith("_envelope_spectrum")]
 
 
+def sensor_series(ds):
+    """The sensors' measured series (`<name>` beside `<name>_clean`, docs/result-file.md)."""
+    return [str(n) for n in ds.data_vars if f"{n}_clean" in ds and ds[n].dims == ("case", "time")]
+
+
 def _draw(index, what, draw, caption):
     """Run `draw()` (which writes a PNG and returns its path) and show it, or note why not."""
     try:
@@ -273,6 +278,14 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
                   "FTF, BPFO, BPFI, BSF, 2·BSF; dotted: shaft sidebands ±k·f_shaft around the panel's fault line.")
         if not constant:
             index.note(f"{channel}: no constant-speed condition, no envelope spectra with fault lines.")
+    for sensor in sensor_series(ds):
+        for name in constant:
+            out = outdir / f"envelope_{sensor}_{slug_text(name)}.png"
+            _draw(index, f"envelope spectra of {sensor}, {name}",
+                  lambda: dfig.envelope_spectra(ds, sensor, groups[name], out, dpi=dpi),
+                  f"envelope spectra of the sensor series {sensor} (noise included) at {name}, each in the band "
+                  "of its fast kurtogram recomputed from the series, one panel per fault label; lines and "
+                  "sidebands marked as above.")
 
     shown = varying or constant[:1]
     for name in shown:
