@@ -331,7 +331,8 @@ def kurtogram(ds, series, case, out, dpi=90):
     ax.set_ylim(len(levels) - 0.5, -0.5)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("level (bands of f_s / 2^(level+1))")
-    ax.set_title(f"Fast kurtogram of {series}, case {int(ds['case'].values[case])} ({fault_label(ds, case)})", fontsize=10)
+    case_id = int(ds["case"].values[case])
+    ax.set_title(f"Fast kurtogram of {series}, case {case_id} ({fault_label(ds, case)})", fontsize=10)
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(mesh, ax=ax, label="kurtosis of the complex envelope <|z|⁴>/<|z|²>² − 2")
     fig.tight_layout()
@@ -352,7 +353,8 @@ def indicator_heatmaps(ds, names, x, y, out, dpi=90):
         cells[key] = case
     ncols = min(4, len(names))
     nrows = math.ceil(len(names) / ncols)
-    fig, axes = plt.subplots(nrows, ncols, squeeze=False, figsize=(3.0 + 1.1 * len(columns) * ncols, 0.9 + (0.6 + 0.45 * len(rows)) * nrows))
+    size = (3.0 + 1.1 * len(columns) * ncols, 0.9 + (0.6 + 0.45 * len(rows)) * nrows)
+    fig, axes = plt.subplots(nrows, ncols, squeeze=False, figsize=size)
     for ax, name in zip(axes.ravel(), names):
         _need(ds, name)
         grid = np.full((len(rows), len(columns)), np.nan)

@@ -310,7 +310,8 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
         _draw(index, f"waterfall of {channel}",
               lambda: dfig.waterfall(ds, channel, dict(list(by_fault.items())[: dfig.MAX_PANELS]), out, dpi=dpi),
               f"envelope spectra of {channel} stacked over the crank speed (rpm), one panel per fault label: "
-              "constant speeds as stored, run-ups in 0.2 s segments, each scaled to its largest; dashed: the lines at order × rpm/60.")
+              "constant speeds as stored, run-ups in 0.2 s segments, each scaled to its largest; "
+              "dashed: the lines at order × rpm/60.")
 
     for name in varying:
         out = outdir / f"orders_{series}_{slug_text(name)}.png"
