@@ -6,9 +6,12 @@ them, one caption line each.
 Metrics views (heatmaps over the grid axes), then for every combination of bearing
 location, speed, waviness amplitude (and any other grid axis) the time-series
 panels per ball count with the ideal mechanism, and the amplitude spectra with the
-bearing's characteristic frequencies. What a study cannot show (no bearing cases,
-no grid axis that varies, cases not told apart by the grid) is skipped and said so
-in the index.
+bearing's characteristic frequencies. Then the diagnosis figures (docs/diagnosis.md):
+the journal centre's orbits, envelope spectra with the fault lines per fault label, a
+spectrogram, a waterfall over the crank speed, order spectra of run-ups, the fast
+kurtogram and heatmaps of the condition indicators. What a study cannot show (no
+bearing cases, no grid axis that varies, cases not told apart by the grid, no
+`envelope:`, no varying speed) is skipped and said so in the index.
 """
 
 import argparse
@@ -20,10 +23,17 @@ if __package__ in (None, ""):  # run as a script: make `analysis` importable
 
 import numpy as np  # noqa: E402
 
-from analysis import figures  # noqa: E402
+from analysis import diagnosis, figures  # noqa: E402
+from analysis import diagnosis_figures as dfig  # noqa: E402
 from analysis.studyfile import grid_axes, open_study, select_cases  # noqa: E402
 
 METRIC_KINDS = ("rms_deviation", "peak_deviation")
+SPEED_KEYS = ("rpm", "speed_from", "speed_to", "speed_over", "speed_mean", "speed_amplitude", "speed_frequency")
+FAULT_KEYS = ("defect_race", "fault")
+INDICATORS = ("rms", "peak", "crest_factor", "kurtosis", "skewness", "impulse_factor", "shape_factor",
+              "clearance_factor", "envelope_band_kurtosis", "envelope_energy_ftf", "envelope_energy_bpfo",
+              "envelope_energy_bpfi", "envelope_energy_2bsf")
+"""Per-channel condition indicators of an `envelope:` study (docs/model.md §7.7)."""
 GROUP_KEYS = ("location", "rpm", "waviness_amplitude")
 
 
@@ -98,7 +108,7 @@ def panel_groups(ds, cases):
         params = {}
         for key in keys:
             value = ds[key].values[case]
-            params[key] = str(value) if key == "location" else float(value)
+            params[key] = str(value) if ds[key].dtype.kind in "USO" else float(value)
         groups.setdefault(tuple(params.items()), set()).add(int(ds["ball_count"].values[case]))
     return [(dict(key), sorted(counts)) for key, counts in groups.items()]
 
@@ -167,13 +177,196 @@ def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
                    "no time-series panels or spectra.")
         return
     groups = panel_groups(ds, cases)
+    profiled = [params for params, _ in groups if not np.isfinite(params["rpm"])]
+    if profiled:
+        index.note(f"{len(profiled)} combinations run a `speed:` profile (no constant `rpm`): no panels or "
+                   "spectra here; the diagnosis section shows them.")
+        groups = [(params, counts) for params, counts in groups if np.isfinite(params["rpm"])]
     if len(groups) > max_groups:
         index.note(f"{len(groups)} parameter combinations; the first {max_groups} are shown "
                    "(raise --max-groups or narrow with --select).")
-    if all(len(counts) == 1 for _, counts in groups):
+    if groups and all(len(counts) == 1 for _, counts in groups):
         index.note("The study has one ball count per combination: one panel per figure.")
     for params, counts in groups[:max_groups]:
         render_group(ds, params, counts, outdir, index, channels, dpi)
+
+
+def speed_text(ds, case):
+    """'600 rpm' for a constant speed, else the profile, e.g. 'run-up 300→900 rpm'."""
+    rpm = diagnosis.constant_rpm(ds, case)
+    if np.isfinite(rpm):
+        return f"{rpm:g} rpm"
+    profile = diagnosis.text(ds["speed_profile"].values[case])
+    if profile == "ramp":
+        low, high = (float(ds[k].values[case]) for k in ("speed_from", "speed_to"))
+        return f"{'run-up' if high > low else 'run-down'} {low:g}→{high:g} rpm"
+    if profile == "sine":
+        return f"sine {float(ds['speed_mean'].values[case]):g} ± {float(ds['speed_amplitude'].values[case]):g} rpm"
+    return f"{profile} speed"
+
+
+def conditions(ds, cases):
+    """{condition: {fault label: case}} of the successful bearing `cases`: a condition
+    is the case's speed with the grid axes that vary among them (other than the
+    speed's and the defect's); the fault label is the `fault` variable. Returns also
+    the count of cases left out because an earlier one had the same pair."""
+    axes = [a for a in varying_axes(ds, cases) if a not in SPEED_KEYS + FAULT_KEYS]
+    if "location" in ds and len(np.unique(ds["location"].values[cases])) > 1 and "location" not in axes:
+        axes.insert(0, "location")
+    out, dropped = {}, 0
+    for case in cases:
+        place = [(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
+                 + figures.value_text(ds, a, ds[a].values[case]) for a in axes]
+        group = out.setdefault(", ".join(place + [speed_text(ds, case)]), {})
+        label = dfig.fault_label(ds, case)
+        if label in group:
+            dropped += 1
+        else:
+            group[label] = int(case)
+    return out, dropped
+
+
+def envelope_channels(ds):
+    """The channels of the study's `envelope:` (those with an envelope spectrum)."""
+    return [str(n)[: -len("_envelope_spectrum")] for n in ds.data_vars if str(n).endswith("_envelope_spectrum")]
+
+
+def sensor_series(ds):
+    """The sensors' measured series (`<name>` beside `<name>_clean`, docs/result-file.md)."""
+    return [str(n) for n in ds.data_vars if f"{n}_clean" in ds and ds[n].dims == ("case", "time")]
+
+
+def _draw(index, what, draw, caption):
+    """Run `draw()` (which writes a PNG and returns its path) and show it, or note why not."""
+    try:
+        index.figure(draw(), caption)
+    except ValueError as e:
+        index.note(f"{what}: not shown ({e}).")
+
+
+def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
+    """The diagnosis figures (analysis/diagnosis_figures.py) of the bearing cases."""
+    index.section("Diagnosis: orbit, envelope, time–frequency and order analysis, kurtogram, indicators")
+    if cases.size == 0:
+        index.note("No successful bearing case: no diagnosis figures.")
+        return
+    groups, dropped = conditions(ds, cases)
+    if dropped:
+        index.note(f"{dropped} cases share a condition and fault label with an earlier case: the first is shown.")
+    names = list(groups)[:max_groups]
+    if len(groups) > max_groups:
+        index.note(f"{len(groups)} conditions; the first {max_groups} are shown (raise --max-groups or use --select).")
+    constant = [n for n in names if all(np.isfinite(diagnosis.constant_rpm(ds, c)) for c in groups[n].values())]
+    varying = [n for n in names if n not in constant]
+    channels = envelope_channels(ds)
+    series = channels[0] if channels else "bearing_force"
+
+    for start in range(0, len(names), dfig.MAX_PANELS):
+        chunk = {n: groups[n] for n in names[start : start + dfig.MAX_PANELS]}
+        _draw(index, "orbit", lambda: dfig.orbit(ds, chunk, outdir / f"orbit_{start // dfig.MAX_PANELS}.png", dpi=dpi),
+              "journal centre orbit (eccentricity y against x, µm) over the analysed window, one panel per "
+              "condition, one curve per fault label; dashed: the clearance circle of radius P_d/2.")
+
+    if not channels:
+        index.note("The study has no `envelope:`: no envelope spectra, waterfall, kurtogram band or indicators.")
+    for channel in channels:
+        for name in constant:
+            out = outdir / f"envelope_{channel}_{slug_text(name)}.png"
+            _draw(index, f"envelope spectra of {channel}, {name}",
+                  lambda: dfig.envelope_spectra(ds, channel, groups[name], out, dpi=dpi),
+                  f"envelope spectra of {channel} at {name}, one panel per fault label (healthy grey); dashed: "
+                  "FTF, BPFO, BPFI, BSF, 2·BSF; dotted: shaft sidebands ±k·f_shaft around the panel's fault line.")
+        if not constant:
+            index.note(f"{channel}: no constant-speed condition, no envelope spectra with fault lines.")
+    for sensor in sensor_series(ds):
+        for name in constant:
+            out = outdir / f"envelope_{sensor}_{slug_text(name)}.png"
+            _draw(index, f"envelope spectra of {sensor}, {name}",
+                  lambda: dfig.envelope_spectra(ds, sensor, groups[name], out, dpi=dpi),
+                  f"envelope spectra of the sensor series {sensor} (noise included) at {name}, each in the band "
+                  "of its fast kurtogram recomputed from the series, one panel per fault label; lines and "
+                  "sidebands marked as above.")
+
+    shown = varying or constant[:1]
+    for name in shown:
+        out = outdir / f"spectrogram_{series}_{slug_text(name)}.png"
+        _draw(index, f"spectrogram, {name}", lambda: dfig.spectrogram(ds, series, groups[name], out, dpi=dpi),
+              f"spectrogram of the squared envelope of {series} in its band at {name}, one panel per fault label; "
+              "dashed and dotted: 1× and 2× the panel's fault line following the crank speed." if channels else
+              f"spectrogram of {series} at {name}, 0 to f_s/2, one panel per fault label (dB re the panel's largest).")
+    if not varying:
+        index.note("No run-up or other varying speed: the spectrogram of the first condition only, no order spectra.")
+
+    speeds = {diagnosis.constant_rpm(ds, c) for g in constant for c in groups[g].values()}
+    for channel in channels:
+        if len(speeds) < 2 and not varying:
+            index.note(f"{channel}: one constant speed only: no waterfall over the crank speed.")
+            continue
+        by_fault = {}
+        for name in names:
+            for label, case in groups[name].items():
+                by_fault.setdefault(label, []).append(case)
+        out = outdir / f"waterfall_{channel}.png"
+        _draw(index, f"waterfall of {channel}",
+              lambda: dfig.waterfall(ds, channel, dict(list(by_fault.items())[: dfig.MAX_PANELS]), out, dpi=dpi),
+              f"envelope spectra of {channel} stacked over the crank speed (rpm), one panel per fault label: "
+              "constant speeds as stored, run-ups in 0.2 s segments, each scaled to its largest; "
+              "dashed: the lines at order × rpm/60.")
+
+    for name in varying:
+        out = outdir / f"orders_{series}_{slug_text(name)}.png"
+        _draw(index, f"order spectra, {name}", lambda: dfig.order_spectra(ds, series, groups[name], out, dpi=dpi),
+              f"order spectra of {series} at {name} (amplitude against cycles per crank revolution), one panel "
+              "per fault label; dashed: the orders of FTF, BPFO, BPFI, BSF, 2·BSF.")
+
+    if channels and names:
+        first = names[0]
+        for label, case in groups[first].items():
+            out = outdir / f"kurtogram_{channels[0]}_{slug_text(first)}_{label}.png"
+            _draw(index, f"kurtogram, {first}, {label}", lambda: dfig.kurtogram(ds, channels[0], case, out, dpi=dpi),
+                  f"fast kurtogram of {channels[0]} recomputed from the series ({first}, fault {label}): "
+                  "kurtosis per band and level; white: its largest, cyan dashed: the band the file records.")
+
+    render_indicators(ds, cases, channels, outdir, index, dpi)
+
+
+def render_indicators(ds, cases, channels, outdir, index, dpi):
+    """Heatmaps of the condition indicators over two grid axes if they tell the cases
+    apart, else over fault label × condition."""
+    if not channels:
+        return
+    sub = ds.isel(case=cases)
+    all_cases = np.arange(len(cases))
+    axes = varying_axes(sub, all_cases)
+    pairs = []
+    if len(axes) >= 2:
+        x_axis, y_axis = metric_axes(axes)
+        label = lambda a: [figures.value_text(sub, a, v) for v in sub[a].values]  # noqa: E731
+        pairs.append(((figures.PARAMETER_TEXT.get(x_axis, x_axis), label(x_axis)),
+                      (figures.PARAMETER_TEXT.get(y_axis, y_axis), label(y_axis))))
+    condition = {case: name for name, g in conditions(sub, all_cases)[0].items() for case in g.values()}
+    pairs.append((("fault", [dfig.fault_label(sub, c) for c in all_cases]),
+                  ("condition", [condition.get(c, "(repeated)") for c in all_cases])))
+    for channel in channels:
+        names = [f"{channel}_{i}" for i in INDICATORS if f"{channel}_{i}" in ds]
+        out = outdir / f"indicators_{channel}.png"
+        for x, y in pairs:
+            try:
+                path = dfig.indicator_heatmaps(sub, names, x, y, out, dpi=dpi)
+            except ValueError as e:
+                reason = e
+                continue
+            index.figure(path, f"condition indicators of {channel} (docs/model.md §7.7) over {x[0]} × {y[0]}, "
+                               "one colour scale a panel; blank: no such case or failed.")
+            break
+        else:
+            index.note(f"indicators of {channel}: not shown ({reason}).")
+
+
+def slug_text(text):
+    """A file-name fragment of a condition's text, e.g. crank_ground_N_b8_run-up300-900rpm."""
+    out = text.replace("→", "-").replace("±", "pm").replace("µ", "u").replace(", ", "_").replace(" ", "")
+    return out.replace("/", "-")
 
 
 def summary(ds, cases):
@@ -204,6 +397,7 @@ def report(study, outdir, channels=figures.PANEL_CHANNELS, max_groups=16, dpi=90
         index.lines += summary(ds, cases)
         render_metrics(ds, cases, outdir, index, dpi)
         render_series(ds, cases, outdir, index, channels, max_groups, dpi)
+        render_diagnosis(ds, cases, outdir, index, max_groups, dpi)
     path = outdir / "index.md"
     index.write(path)
     return path

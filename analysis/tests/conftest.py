@@ -6,9 +6,12 @@ Environment:
   STUDYRUN_SHARD_FILES optional, colon-separated shard files of the smoke study
                        (`studyrun studies/smoke.yaml --shard K/N`); unset: skip those tests.
   STUDYRUN_MERGED_FILE optional, `studyrun merge` of those shards; unset: skip that comparison.
+  STUDYRUN_DIAGNOSIS_FILE optional, the result of `studyrun studies/diagnosis.yaml`; unset: the
+                       tests run that study with STUDYRUN_BIN (the studyrun binary), or skip.
 """
 
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -62,6 +65,25 @@ def shard_paths():
 @pytest.fixture(scope="package")
 def merged_path():
     return study_path("STUDYRUN_MERGED_FILE", "studyrun merge merged.h5 s1.h5 s2.h5")
+
+
+@pytest.fixture(scope="package")
+def diagnosis_path(tmp_path_factory):
+    if os.environ.get("STUDYRUN_DIAGNOSIS_FILE"):
+        return study_path("STUDYRUN_DIAGNOSIS_FILE", "studyrun studies/diagnosis.yaml -o diagnosis.h5")
+    binary = os.environ.get("STUDYRUN_BIN")
+    if not binary:
+        pytest.skip("neither STUDYRUN_DIAGNOSIS_FILE nor STUDYRUN_BIN is set")
+    out = tmp_path_factory.mktemp("diagnosis") / "diagnosis.h5"
+    subprocess.run([binary, str(REPO / "studies/diagnosis.yaml"), "-o", str(out), "-j", "2", "--force", "-q"],
+                   check=True)
+    return str(out)
+
+
+@pytest.fixture(scope="package")
+def diagnosis(diagnosis_path):
+    with open_study(diagnosis_path) as ds:
+        yield ds.load()
 
 
 @pytest.fixture(scope="package")
