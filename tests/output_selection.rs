@@ -21,7 +21,10 @@ const BASE: &str = "name: sel\nduration: 0.05\nsample_rate: 10000\ntransient: \"
 /// Runs `BASE` with `output` appended into `<name>.h5` in `dir`.
 fn run(dir: &Path, name: &str, output: &str) -> StudyReader {
     write(dir, &format!("{name}.yaml"), &format!("{BASE}{output}"));
-    studyrun_ok(dir, &[&format!("{name}.yaml"), "-o", &format!("{name}.h5"), "-q"]);
+    studyrun_ok(
+        dir,
+        &[&format!("{name}.yaml"), "-o", &format!("{name}.h5"), "-q"],
+    );
     StudyReader::open(dir.join(format!("{name}.h5"))).unwrap()
 }
 
@@ -37,7 +40,11 @@ fn same_spectra_and_metrics(a: &StudyReader, b: &StudyReader) {
     assert_eq!(la.spectra, lb.spectra);
     assert_eq!(la.metrics, lb.metrics);
     assert_eq!(la.frequencies, lb.frequencies);
-    let wall = la.metrics.iter().position(|m| m.name == "wall_time").unwrap();
+    let wall = la
+        .metrics
+        .iter()
+        .position(|m| m.name == "wall_time")
+        .unwrap();
     for row in 0..la.n_cases() {
         let (mut ca, mut cb) = (a.read_case(row).unwrap(), b.read_case(row).unwrap());
         assert_eq!(ca.status, studyrun::output::Status::Ok);
@@ -79,7 +86,11 @@ fn a_decimated_selection_stores_every_kth_sample_of_the_full_run() {
             assert_eq!(bits(&cd.series[k]), bits(&kept), "{name}, row {row}");
         }
     }
-    let refs: Vec<&str> = ld.reference_series.iter().map(|s| s.name.as_str()).collect();
+    let refs: Vec<&str> = ld
+        .reference_series
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
     assert_eq!(refs, ["reference_slider_acceleration"]);
     let ref_at = lf
         .reference_series
@@ -96,7 +107,10 @@ fn a_decimated_selection_stores_every_kth_sample_of_the_full_run() {
     }
     same_spectra_and_metrics(&full, &dec);
     assert_eq!(dec.attribute("decimate"), Some(&AttrValue::I64(4)));
-    assert_eq!(dec.attribute("series_sample_rate"), Some(&AttrValue::F64(2500.0)));
+    assert_eq!(
+        dec.attribute("series_sample_rate"),
+        Some(&AttrValue::F64(2500.0))
+    );
     assert_eq!(full.attribute("decimate"), Some(&AttrValue::I64(1)));
     let inspect = studyrun_ok(dir.path(), &["inspect", "dec.h5"]);
     let text = String::from_utf8_lossy(&inspect.stdout);
@@ -179,9 +193,23 @@ fn bad_output_settings_are_refused_by_field() {
             .to_string()
     };
     let cases = [
-        ("output: {decimate: 0}\n", &["grid.yaml:", "`output.decimate`", "0 is not allowed", "an integer from 1"][..]),
-        ("output: {decimate: 2.5}\n", &["`output.decimate`", "2.5 is not allowed"][..]),
-        ("output: {decimate: \"4 Hz\"}\n", &["`output.decimate`", "\"4 Hz\" is not allowed"][..]),
+        (
+            "output: {decimate: 0}\n",
+            &[
+                "grid.yaml:",
+                "`output.decimate`",
+                "0 is not allowed",
+                "an integer from 1",
+            ][..],
+        ),
+        (
+            "output: {decimate: 2.5}\n",
+            &["`output.decimate`", "2.5 is not allowed"][..],
+        ),
+        (
+            "output: {decimate: \"4 Hz\"}\n",
+            &["`output.decimate`", "\"4 Hz\" is not allowed"][..],
+        ),
         (
             "output:\n  series: [slider_acceleration, slider_velocity]\n",
             &[
@@ -196,7 +224,14 @@ fn bad_output_settings_are_refused_by_field() {
             "output:\n  series: [acc, crank_moment, acc]\n",
             &["`output.series[2]`", "series `acc` is listed twice"][..],
         ),
-        ("output: {series: some}\n", &["`output.series`", "`some` is not allowed", "`all` or `none`"][..]),
+        (
+            "output: {series: some}\n",
+            &[
+                "`output.series`",
+                "`some` is not allowed",
+                "`all` or `none`",
+            ][..],
+        ),
     ];
     for (output, needles) in cases {
         let err = refused(output);
@@ -206,7 +241,10 @@ fn bad_output_settings_are_refused_by_field() {
     }
     let accepted = |output: &str| Study::from_yaml(&format!("{BASE}{output}"), Path::new("g.yaml"));
     let all = accepted("output: {series: all, decimate: 1}\n").unwrap();
-    assert_eq!(all.stored_channels().len(), studyrun::simulate::CHANNELS.len());
+    assert_eq!(
+        all.stored_channels().len(),
+        studyrun::simulate::CHANNELS.len()
+    );
     assert_eq!(all.stored_sensor_series(), [0, 1]);
     let two = accepted("output: {series: [acc, crank_moment], decimate: 501}\n").unwrap();
     assert_eq!(two.stored_channels(), [1]);
@@ -243,7 +281,11 @@ fn the_memory_estimate_counts_the_stored_series_only() {
 #[test]
 fn the_dry_run_shows_the_stored_series() {
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "g.yaml", &format!("{BASE}output: {{series: [crank_moment], decimate: 5}}\n"));
+    write(
+        dir.path(),
+        "g.yaml",
+        &format!("{BASE}output: {{series: [crank_moment], decimate: 5}}\n"),
+    );
     let out = studyrun(dir.path(), &["g.yaml", "--dry-run"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(

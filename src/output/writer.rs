@@ -681,7 +681,12 @@ impl Creator<'_> {
             case,
             time,
             self.coordinate(FREQUENCY, &l.frequencies, meta(frequency), next)?,
-            self.coordinate(REFERENCE, &ids32(&l.reference_ids), meta(reference), next + 1)?,
+            self.coordinate(
+                REFERENCE,
+                &ids32(&l.reference_ids),
+                meta(reference),
+                next + 1,
+            )?,
         ))
     }
 

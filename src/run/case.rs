@@ -161,7 +161,8 @@ fn stored_series(study: &Study, case: &Case, mut channels: Vec<Vec<f64>>) -> Vec
         if wanted == [false, false] {
             continue;
         }
-        let input = &channels[channel_index(sensor.channel).expect("sensor channels are validated")];
+        let input =
+            &channels[channel_index(sensor.channel).expect("sensor channels are validated")];
         let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
         for (keep, s) in wanted.into_iter().zip([noisy, clean]) {
             if keep {

@@ -34,8 +34,8 @@ use rayon::prelude::*;
 
 use crate::error::RunError;
 use crate::output::{
-    new_journal_path, overwrite, side_paths, stored_reference_channels, study_layout, ChunkEncoder, DataFile, Layout,
-    OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter,
+    new_journal_path, overwrite, side_paths, stored_reference_channels, study_layout, ChunkEncoder,
+    DataFile, Layout, OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::signal::EnvelopeAnalysis;

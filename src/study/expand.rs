@@ -1180,11 +1180,7 @@ fn series_output(
                     ));
                 }
                 if names.contains(name) {
-                    return Err(ctx.err(
-                        place,
-                        &field,
-                        format!("series `{name}` is listed twice"),
-                    ));
+                    return Err(ctx.err(place, &field, format!("series `{name}` is listed twice")));
                 }
                 names.push(name.clone());
             }
