@@ -217,7 +217,8 @@ def analysis_window(ds):
     n = ds.sizes["time"]
     rate = float(ds.attrs["sample_rate"])
     decimate = int(ds.attrs.get("decimate", 1))
-    full = round(float(ds.attrs["duration"]) * rate) + 1
+    # Output samples per case; a file always records its duration, a hand-made dataset may not.
+    full = round(float(ds.attrs["duration"]) * rate) + 1 if "duration" in ds.attrs else (n - 1) * decimate + 1
     start = max(0, math.ceil(float(ds.attrs["transient"]) * rate - 1e-9))
     k = np.arange(n) * decimate
     return (k >= start) & (k < full - 1)
