@@ -15,6 +15,11 @@ assigned to splits whole, so no case is in two splits: the case ids (the file's 
 coordinate, so a merged file and its shards split alike) are shuffled by a generator
 seeded with `seed`, then cut at the fractions. Only `ok` cases are used.
 
+Windows are cut from the series as stored: a file whose grid has `output.decimate: k`
+stores every k-th sample (rate `series_sample_rate`), so L and H count stored samples.
+A file without series (`output.series: none`) has nothing to window: `make_splits`
+says so.
+
 PyTorch is imported only by `torch_dataset`, never on import of this module, and is
 not a requirement of the analysis package.
 """
@@ -122,6 +127,9 @@ def make_splits(ds, channels, length, hop, labels=("location",), parameters=None
     case (e.g. `bearing_force` of an `ideal` case: select the cases first).
     """
     channels, labels = list(channels), list(labels)
+    if "time" not in ds.dims:
+        raise ValueError("the file stores no series (its grid file has `output.series: none`), and windows "
+                         f"need them: run the study with `output.series` naming {channels or 'the series'}")
     bad = [c for c in channels if c not in ds or ds[c].dims != ("case", "time")]
     if not channels or bad:
         available = sorted(v for v in ds.data_vars if ds[v].dims == ("case", "time"))

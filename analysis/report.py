@@ -155,23 +155,35 @@ def render_group(ds, params, counts, outdir, index, channels, dpi):
         args = (ds, params["location"], params["rpm"], params["waviness_amplitude"])
         for channel in channels:
             t0, t1 = figures.default_window(ds, params["rpm"])
+            if channel not in ds:
+                index.note(f"{channel}, {text}: not shown (the file does not store it: see `output.series`).")
+                continue
             try:
                 out = figures.paper_panels(*args, channel, outdir / f"panels_{channel}_{name}.png",
                                            select=fixed, ball_counts=chunk, dpi=dpi)
                 index.figure(out, f"{figures.CHANNEL_TEXT[channel]} against time, t = {t0:g}–{t1:g} s, "
                                   f"N_b = {balls} (ideal mechanism dashed): {text}.")
-                if f"{channel}_spectrum" in ds:
+                if int(ds.attrs.get("decimate", 1)) != 1:
+                    index.note(f"spectra of {channel}, {text}: not shown (the ideal mechanism's spectrum "
+                               "needs its full-rate series; the file stores every "
+                               f"{int(ds.attrs['decimate'])}th sample, `output.decimate`).")
+                elif f"{channel}_spectrum" in ds:
                     out = figures.spectra(*args, channel, outdir / f"spectrum_{channel}_{name}.png",
                                           select=fixed, ball_counts=chunk, dpi=dpi)
                     index.figure(out, f"amplitude spectra of {figures.CHANNEL_TEXT[channel]}, N_b = {balls}, "
                                       f"ideal mechanism grey, characteristic frequencies marked: {text}.")
-            except ValueError as e:
+            except (ValueError, KeyError) as e:
+                # KeyError: an ideal-mechanism series the file does not store (`output.series`).
                 index.note(f"{channel}, {text}: not shown ({e}).")
 
 
 def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
     """Time-series panels and spectra of every parameter combination (at most max_groups)."""
     index.section("Time series and spectra per ball count")
+    if "time" not in ds.dims:
+        index.note("The file stores no series (its grid file has `output.series: none`): "
+                   "no time-series panels or spectra; the metrics above are complete.")
+        return
     if cases.size == 0:
         index.note("The study has no successful case with a bearing (crank_ground or crank_rod): "
                    "no time-series panels or spectra.")
@@ -379,7 +391,7 @@ def summary(ds, cases):
         f"- grid axes: {', '.join(grid_axes(ds)) or 'none (explicit cases)'}",
         f"- cases: {ds.sizes['case']} ({int((status == 1).sum())} ok, {int((status == 2).sum())} failed, "
         f"{ideal} ideal); {cases.size} successful bearing cases shown",
-        f"- analysis window {float(ds.attrs['transient']):g} s ≤ t < {float(ds['time'].values[-1]):g} s, "
+        f"- analysis window {float(ds.attrs['transient']):g} s ≤ t < {float(ds.attrs['duration']):g} s, "
         f"sample rate {float(ds.attrs['sample_rate']):g} Hz",
         "",
     ]

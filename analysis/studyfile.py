@@ -203,15 +203,25 @@ def select_cases(ds, **params):
 
 
 def analysis_window(ds):
-    """Boolean mask over `time`: the samples at transient <= t < duration (s), the
-    window the stored metrics and spectra use. It is half-open (the last sample, at
-    t = duration, is left out) so that a window of whole crank revolutions holds
-    each crank phase once; its first sample is the first at or after the transient
-    (to within 1e-9 of a sample interval), found by index as studyrun does."""
+    """Boolean mask over `time`: the stored samples at transient <= t < duration (s),
+    the window the stored metrics and spectra use. It is half-open (the last sample
+    of the output, at t = duration, is left out) so that a window of whole crank
+    revolutions holds each crank phase once; its first sample is the first at or
+    after the transient (to within 1e-9 of a sample interval), found by index as
+    studyrun does. A file whose series keep every k-th sample (`decimate` attribute,
+    `output.decimate` of the grid) stores output samples 0, k, 2k, ...: the mask
+    keeps those inside the window. Raises ValueError for a file without series."""
+    if "time" not in ds.dims:
+        raise ValueError("the file stores no series (its grid file has `output.series: none`): "
+                         "no time window; run the study with `output.series` naming the series")
     n = ds.sizes["time"]
-    start = max(0, math.ceil(float(ds.attrs["transient"]) * float(ds.attrs["sample_rate"]) - 1e-9))
-    k = np.arange(n)
-    return (k >= start) & (k < n - 1)
+    rate = float(ds.attrs["sample_rate"])
+    decimate = int(ds.attrs.get("decimate", 1))
+    # Output samples per case; a file always records its duration, a hand-made dataset may not.
+    full = round(float(ds.attrs["duration"]) * rate) + 1 if "duration" in ds.attrs else (n - 1) * decimate + 1
+    start = max(0, math.ceil(float(ds.attrs["transient"]) * rate - 1e-9))
+    k = np.arange(n) * decimate
+    return (k >= start) & (k < full - 1)
 
 
 def _ideal_joint_force(ds, refs):

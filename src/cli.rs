@@ -449,17 +449,23 @@ fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
         }
         out!("{}", line.join("\t"))?;
     }
-    let n_time = study.sampling.len() as f64;
+    let n_time = study.stored_times().len() as f64;
+    let n_series = study.stored_series_count() as f64;
     let n_freq = (study.analysis_window().len() / 2 + 1) as f64;
     let width = if study.float32 { 4.0 } else { 8.0 };
     let raw = rows.len() as f64
-        * (CHANNELS.len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)
+        * (n_series * n_time + study.spectrum_channels.len() as f64 * n_freq)
         * width;
     let estimate = study.memory_estimate(jobs);
     out!(
-        "\n{} cases ({} ideal references); raw output {:.1} MB before compression (deflate level {}, {})",
+        "\n{} cases ({} ideal references); {} stored series x {} samples (output.decimate {}) \
+         and {} spectra per case; raw output {:.1} MB before compression (deflate level {}, {})",
         rows.len(),
         study.references.len(),
+        n_series,
+        n_time,
+        study.output.decimate,
+        study.spectrum_channels.len(),
         raw / 1e6,
         study.compression,
         if study.float32 { "float32" } else { "float64" },

@@ -39,14 +39,30 @@ pub fn inspect(path: &Path) -> Result<String> {
     writeln!(out, "grid:     {axes}")?;
     writeln!(
         out,
-        "sampling: {} s at {} Hz ({} samples); analysed {} s <= t < {} s, {} frequency bins",
+        "sampling: {} s at {} Hz; analysed {} s <= t < {} s, {} frequency bins",
         attr("duration"),
         attr("sample_rate"),
-        l.times.len(),
         attr("transient"),
         attr("duration"),
         l.frequencies.len()
     )?;
+    if l.series.is_empty() {
+        writeln!(out, "series:   none stored (metrics and spectra only)")?;
+    } else {
+        let names: Vec<&str> = l.series.iter().map(|s| s.name.as_str()).collect();
+        let every = match attr("decimate").as_str() {
+            "1" | "?" => "every sample of the output".to_string(),
+            k => format!("one sample in {k} of the output, no anti-alias filter"),
+        };
+        writeln!(
+            out,
+            "series:   {} stored, {} samples each at {} Hz ({every}): {}",
+            names.len(),
+            l.times.len(),
+            attr("series_sample_rate"),
+            names.join(", ")
+        )?;
+    }
     writeln!(out, "solver:   {}", attr("solver"))?;
     writeln!(out, "effects:  {}", attr("effects"))?;
     writeln!(

@@ -281,7 +281,8 @@ pub struct Layout {
     /// Global case ids (any distinct values up to [`MAX_ID`], not necessarily `0..n`);
     /// none for an empty shard.
     pub case_ids: Vec<u64>,
-    /// Sample times of every series (s); non-empty if there are series.
+    /// Sample times of every series (s); non-empty if there are series. Empty when
+    /// no variable uses it: the file then has no `time` coordinate.
     pub times: Vec<f64>,
     /// Bin frequencies of every spectrum (Hz); non-empty if there are spectra.
     pub frequencies: Vec<f64>,

@@ -93,7 +93,7 @@ pub use merge::merge;
 pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
 pub use reader::{CaseData, StudyReader};
 pub use study_layout::{
-    fnv1a, study_layout, study_metric_specs, StudyFingerprint, MODEL_CONVENTIONS,
-    REFERENCE_CHANNELS,
+    fnv1a, stored_reference_channels, study_layout, study_metric_specs, StudyFingerprint,
+    MODEL_CONVENTIONS, REFERENCE_CHANNELS,
 };
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

@@ -304,7 +304,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
     let read = |name: &str| file.dataset(name).at(path, name);
     let mut layout = Layout {
         case_ids: read_ids(file, CASE, path)?,
-        times: read(TIME)?.read_raw::<f64>().at(path, TIME)?,
+        // A file without series has no `time` coordinate.
+        times: match file.dataset(TIME) {
+            Ok(ds) => ds.read_raw::<f64>().at(path, TIME)?,
+            Err(_) => Vec::new(),
+        },
         frequencies: read(FREQUENCY)?.read_raw::<f64>().at(path, FREQUENCY)?,
         reference_ids: read_ids(file, REFERENCE, path)?,
         series: Vec::new(),

@@ -170,6 +170,14 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         ("sample_rate".to_string(), study.sampling.sample_rate.into()),
         ("transient".to_string(), study.transient.into()),
         (
+            "decimate".to_string(),
+            (study.output.decimate as i64).into(),
+        ),
+        (
+            "series_sample_rate".to_string(),
+            study.stored_sample_rate().into(),
+        ),
+        (
             "analysis_window".to_string(),
             "transient <= time < duration (the sample at time = duration left out): \
              the samples the metrics and spectra use"
@@ -221,14 +229,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     }
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
-        times: study.sampling.times(),
+        times: study.stored_times(),
         frequencies: frequencies(n_window, study.sampling.sample_rate),
         reference_ids: (0..study.references.len() as u64).collect(),
-        series: CHANNELS
-            .iter()
-            .map(|c| VarSpec::new(c.name, c.units, c.long_name))
-            .chain(study.sensors.iter().flat_map(|s| s.specs()))
-            .collect(),
+        series: stored_series_specs(study),
         spectra: study
             .spectrum_channels
             .iter()
@@ -262,7 +266,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         },
         parameters,
         reference_parameters,
-        reference_series: reference_specs(),
+        reference_series: reference_specs(study),
         reference_index: cases.iter().map(|c| c.reference as u64).collect(),
         attributes,
         storage: Storage {
@@ -316,7 +320,22 @@ pub fn fnv1a(parts: &[&[u8]]) -> u64 {
     h
 }
 
-/// The reference series stored per ideal run: the channels an ideal mechanism has.
+/// The `[case, time]` variables of a study's file: its stored channels
+/// ([`Study::stored_channels`]), then its stored sensor series.
+fn stored_series_specs(study: &Study) -> Vec<VarSpec> {
+    let sensors: Vec<VarSpec> = study.sensors.iter().flat_map(|s| s.specs()).collect();
+    let channels = study.stored_channels().into_iter().map(|k| {
+        let c = &CHANNELS[k];
+        VarSpec::new(c.name, c.units, c.long_name)
+    });
+    let sensors = study
+        .stored_sensor_series()
+        .into_iter()
+        .map(|k| sensors[k].clone());
+    channels.chain(sensors).collect()
+}
+
+/// The reference series an ideal run may store: the channels an ideal mechanism has.
 pub const REFERENCE_CHANNELS: [&str; 6] = [
     "slider_acceleration",
     "crank_moment",
@@ -326,9 +345,25 @@ pub const REFERENCE_CHANNELS: [&str; 6] = [
     "crank_rod_force_y",
 ];
 
-/// The [`VarSpec`]s of the reference series (`reference_<channel>`).
-pub fn reference_specs() -> Vec<VarSpec> {
+/// The channels of [`REFERENCE_CHANNELS`] a study's file stores for each ideal run:
+/// those among its stored channels ([`Study::stored_channels`]), at the same
+/// decimation.
+pub fn stored_reference_channels(study: &Study) -> Vec<&'static str> {
+    let stored: Vec<&str> = study
+        .stored_channels()
+        .into_iter()
+        .map(|k| CHANNELS[k].name)
+        .collect();
     REFERENCE_CHANNELS
+        .into_iter()
+        .filter(|c| stored.contains(c))
+        .collect()
+}
+
+/// The [`VarSpec`]s of the reference series a study's file stores
+/// (`reference_<channel>` for each of [`stored_reference_channels`]).
+pub fn reference_specs(study: &Study) -> Vec<VarSpec> {
+    stored_reference_channels(study)
         .iter()
         .map(|name| {
             let ch = CHANNELS

@@ -574,7 +574,7 @@ impl Creator<'_> {
         for (name, value) in &l.attributes {
             attributes::write(self.file, name, value).at(self.path, name)?;
         }
-        let [case, time, frequency, reference] = self.coordinates()?;
+        let (case, time, frequency, reference) = self.coordinates()?;
 
         for p in &l.parameters {
             self.parameter(p, Role::Parameter, &case)?;
@@ -612,7 +612,7 @@ impl Creator<'_> {
             self.finish_var(&ds, spec, Some(Role::Metric), &[&case])?;
             fill_attr(&ds, false).at(self.path, &spec.name)?;
         }
-        let mut dimid = COORDINATES.len();
+        let mut dimid = COORDINATES.len() - usize::from(time.is_none());
         for (name, ids, meta, specs, role) in [
             (
                 REPLICATE,
@@ -647,35 +647,47 @@ impl Creator<'_> {
                 fill_attr(&ds, false).at(self.path, &spec.name)?;
             }
         }
-        for (specs, role, dim) in [
-            (&l.series, Role::Series, &time),
-            (&l.spectra, Role::Spectrum, &frequency),
-        ] {
-            for spec in specs {
-                self.array(spec, role, &case, dim)?;
-            }
+        // The layout was validated: a file with series has times.
+        for spec in &l.series {
+            self.array(spec, Role::Series, &case, time.as_ref().expect("times"))?;
+        }
+        for spec in &l.spectra {
+            self.array(spec, Role::Spectrum, &case, &frequency)?;
         }
         for p in &l.reference_parameters {
             self.parameter(p, Role::ReferenceParameter, &reference)?;
         }
         for spec in &l.reference_series {
-            self.array(spec, Role::ReferenceSeries, &reference, &time)?;
+            let time = time.as_ref().expect("times");
+            self.array(spec, Role::ReferenceSeries, &reference, time)?;
         }
         Ok(())
     }
 
-    /// Writes the four coordinate variables and makes them dimension scales.
-    fn coordinates(&self) -> Result<[Dataset; 4], StudyFileError> {
+    /// Writes the coordinate variables and makes them dimension scales: `case`,
+    /// `time` (left out when the layout has no times: then no variable uses it),
+    /// `frequency` and `reference`, with consecutive netCDF dimension ids.
+    fn coordinates(&self) -> Result<(Dataset, Option<Dataset>, Dataset, Dataset), StudyFileError> {
         let l = self.layout;
         let [case, time, frequency, reference] = COORDINATES;
         let meta =
             |(_, units, long_name): (&'static str, &'static str, &'static str)| (units, long_name);
-        Ok([
-            self.coordinate(CASE, &ids32(&l.case_ids), meta(case), 0)?,
-            self.coordinate(TIME, &l.times, meta(time), 1)?,
-            self.coordinate(FREQUENCY, &l.frequencies, meta(frequency), 2)?,
-            self.coordinate(REFERENCE, &ids32(&l.reference_ids), meta(reference), 3)?,
-        ])
+        let case = self.coordinate(CASE, &ids32(&l.case_ids), meta(case), 0)?;
+        let time = (!l.times.is_empty())
+            .then(|| self.coordinate(TIME, &l.times, meta(time), 1))
+            .transpose()?;
+        let next = 1 + usize::from(time.is_some());
+        Ok((
+            case,
+            time,
+            self.coordinate(FREQUENCY, &l.frequencies, meta(frequency), next)?,
+            self.coordinate(
+                REFERENCE,
+                &ids32(&l.reference_ids),
+                meta(reference),
+                next + 1,
+            )?,
+        ))
     }
 
     /// A coordinate variable `name` holding `values`, with `(units, long_name)`,

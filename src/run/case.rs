@@ -20,8 +20,9 @@ pub(crate) struct CaseResult {
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`crate::simulate::CHANNELS`] entry, then per sensor its
-    /// noisy and its noise-free series (empty when failed).
+    /// The series the file stores (empty when failed): one per
+    /// [`Study::stored_channels`] entry, then the stored sensor series
+    /// ([`Study::stored_sensor_series`]), each at its stored samples.
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
@@ -120,13 +121,7 @@ pub(crate) fn run_case(
     let replicates = study
         .replicates
         .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
-    let mut series = out.channels;
-    let dt = 1.0 / study.sampling.sample_rate;
-    for (index, sensor) in study.sensors.iter().enumerate() {
-        let input = &series[channel_index(sensor.channel).expect("sensor channels are validated")];
-        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
-        series.extend([noisy, clean]);
-    }
+    let series = stored_series(study, case, out.channels);
     metrics.push(start.elapsed().as_secs_f64());
     if let Some(r) = replicates {
         metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
@@ -151,6 +146,36 @@ pub(crate) fn run_case(
         metrics,
         cost,
     }
+}
+
+/// The series of a case the file stores, from its full-rate `channels` (one per
+/// [`crate::simulate::CHANNELS`] entry): the sensors measure the full-rate channels
+/// (docs/model.md §7.8), then only the stored channels and sensor series are kept,
+/// at their stored samples ([`Study::keep_stored_samples`]); the rest is dropped here.
+fn stored_series(study: &Study, case: &Case, mut channels: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    let dt = 1.0 / study.sampling.sample_rate;
+    let sensor_series = study.stored_sensor_series();
+    let mut sensors = Vec::with_capacity(sensor_series.len());
+    for (index, sensor) in study.sensors.iter().enumerate() {
+        let wanted = [2 * index, 2 * index + 1].map(|k| sensor_series.contains(&k));
+        if wanted == [false, false] {
+            continue;
+        }
+        let input =
+            &channels[channel_index(sensor.channel).expect("sensor channels are validated")];
+        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
+        for (keep, s) in wanted.into_iter().zip([noisy, clean]) {
+            if keep {
+                sensors.push(study.keep_stored_samples(s));
+            }
+        }
+    }
+    study
+        .stored_channels()
+        .into_iter()
+        .map(|k| study.keep_stored_samples(std::mem::take(&mut channels[k])))
+        .chain(sensors)
+        .collect()
 }
 
 /// What a case's replicates add to its record.

@@ -34,8 +34,8 @@ use rayon::prelude::*;
 
 use crate::error::RunError;
 use crate::output::{
-    new_journal_path, overwrite, side_paths, study_layout, ChunkEncoder, DataFile, Layout,
-    OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter, REFERENCE_CHANNELS,
+    new_journal_path, overwrite, side_paths, stored_reference_channels, study_layout, ChunkEncoder,
+    DataFile, Layout, OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::signal::EnvelopeAnalysis;
@@ -392,11 +392,13 @@ fn create_file(
     });
     removed?;
     let (references, mut writer) = (references?, writer?);
+    let stored = stored_reference_channels(study);
     for (k, r) in references.iter().enumerate() {
-        let series: Vec<&[f64]> = REFERENCE_CHANNELS
+        let series: Vec<Vec<f64>> = stored
             .iter()
-            .map(|c| r.channel(c).expect("reference channel"))
+            .map(|c| study.keep_stored_samples(r.channel(c).expect("reference channel").to_vec()))
             .collect();
+        let series: Vec<&[f64]> = series.iter().map(Vec::as_slice).collect();
         writer
             .write_reference(k, &series)
             .map_err(RunError::file(&partial_path))?;

@@ -365,4 +365,19 @@ pub struct OutputSection {
     pub dtype: Option<S<String>>,
     /// Deflate level 0..=9 (default 1; 0 = uncompressed).
     pub compression: Option<S<u8>>,
+    /// The series stored: a list of names, `all` (default) or `none`.
+    pub series: Option<S<SeriesValue>>,
+    /// Every `decimate`-th sample of the stored series is kept (an integer >= 1,
+    /// default 1).
+    pub decimate: Option<S<Scalar>>,
+}
+
+/// An `output.series` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum SeriesValue {
+    /// Series names: simulated channels and sensor series.
+    List(Vec<String>),
+    /// A name: `all` or `none`.
+    Name(String),
 }

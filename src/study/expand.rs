@@ -7,12 +7,12 @@ use serde_saphyr::Location;
 
 use super::config::{
     BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
-    Scalar, SpectraSection, SpeedSection, WavinessSection, S,
+    Scalar, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
 };
 use super::memory::{Limits, MemoryEstimate, Shape};
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
-use super::{Case, Study, StudyError, DEFAULT_MAX_CASES};
+use super::{Case, SeriesOutput, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
 mod replicates;
@@ -502,6 +502,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         chaos_check,
         revolutions,
         sensors: Vec::new(),
+        output: SeriesOutput::default(),
     };
     if let Some(list) = &file.sensors {
         let taken = study_layout(&study, &[], None)
@@ -510,6 +511,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             .collect();
         study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken)?;
     }
+    study.output = series_output(&ctx, file.output.as_ref(), &study)?;
     Ok(study)
 }
 
@@ -711,6 +713,8 @@ fn check_study_memory(
                 .as_ref()
                 .map_or(0, |e| 2 * e.value.channels.value.len()),
         sensor_series: file.sensors.as_ref().map_or(0, |s| 2 * s.value.len()),
+        stored_series: stored_series_bound(file),
+        stored_samples: samples.div_ceil(decimate_bound(file)),
         float32: file
             .output
             .as_ref()
@@ -727,6 +731,35 @@ fn check_study_memory(
         revolutions: 0,
     };
     check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
+}
+
+/// The most series a case of `file` may store, before `output.series` is checked:
+/// every channel and sensor series for `all`, none for `none`, else the list's length.
+fn stored_series_bound(file: &GridFile) -> usize {
+    let every = CHANNELS.len() + file.sensors.as_ref().map_or(0, |s| 2 * s.value.len());
+    match file.output.as_ref().and_then(|o| o.series.as_ref()) {
+        Some(S {
+            value: SeriesValue::List(list),
+            ..
+        }) => list.len().min(every),
+        Some(S {
+            value: SeriesValue::Name(n),
+            ..
+        }) if n == "none" => 0,
+        _ => every,
+    }
+}
+
+/// `output.decimate` if it is a whole number of at least 1, else 1 (it is checked
+/// once the study is built).
+fn decimate_bound(file: &GridFile) -> u64 {
+    match file.output.as_ref().and_then(|o| o.decimate.as_ref()) {
+        Some(S {
+            value: Scalar::Num(x),
+            ..
+        }) if *x >= 1.0 && x.fract() == 0.0 && *x < u64::MAX as f64 => *x as u64,
+        _ => 1,
+    }
 }
 
 /// The grid's `count` cases: each is the base with one value of every group (mixed
@@ -1079,6 +1112,82 @@ fn output_settings(
         }
     };
     Ok((float32, compression))
+}
+
+/// `output.series` and `output.decimate`: the series names checked against what
+/// `study` simulates (its channels and sensor series; distinct), `decimate` an
+/// integer from 1 to the samples per case.
+fn series_output(
+    ctx: &Ctx<'_>,
+    output: Option<&OutputSection>,
+    study: &Study,
+) -> Result<SeriesOutput, StudyError> {
+    let mut chosen = SeriesOutput::default();
+    let Some(output) = output else {
+        return Ok(chosen);
+    };
+    if let Some(d) = &output.decimate {
+        let samples = study.sampling.len();
+        let k = match d.value {
+            Scalar::Num(x) if x.fract() == 0.0 && (1.0..=samples as f64).contains(&x) => x,
+            _ => {
+                return Err(ctx.err(
+                    Some(at(&d.referenced)),
+                    "output.decimate",
+                    format!(
+                        "{} is not allowed: an integer from 1 (every sample) to {samples} \
+                         (the samples per case)",
+                        d.value
+                    ),
+                ))
+            }
+        };
+        chosen.decimate = k as usize;
+    }
+    let Some(series) = &output.series else {
+        return Ok(chosen);
+    };
+    let place = Some(at(&series.referenced));
+    chosen.names = match &series.value {
+        SeriesValue::Name(n) if n == "all" => None,
+        SeriesValue::Name(n) if n == "none" => Some(Vec::new()),
+        SeriesValue::Name(n) => {
+            return Err(ctx.err(
+                place,
+                "output.series",
+                format!("`{n}` is not allowed: a list of series names, `all` or `none`"),
+            ))
+        }
+        SeriesValue::List(list) => {
+            let allowed: Vec<String> = study
+                .simulated_channels()
+                .into_iter()
+                .map(|c| CHANNELS[c].name.to_string())
+                .chain(study.sensors.iter().flat_map(|s| s.specs()).map(|v| v.name))
+                .collect();
+            let mut names: Vec<String> = Vec::new();
+            for (k, name) in list.iter().enumerate() {
+                let field = format!("output.series[{k}]");
+                if !allowed.contains(name) {
+                    return Err(ctx.err(
+                        place,
+                        &field,
+                        format!(
+                            "unknown series `{name}`; expected one of: {} (or `all` or `none` \
+                             instead of a list)",
+                            allowed.join(", ")
+                        ),
+                    ));
+                }
+                if names.contains(name) {
+                    return Err(ctx.err(place, &field, format!("series `{name}` is listed twice")));
+                }
+                names.push(name.clone());
+            }
+            Some(names)
+        }
+    };
+    Ok(chosen)
 }
 
 /// The ideal mechanism a case is compared with: same bodies, speed and gravity.

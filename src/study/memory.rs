@@ -7,8 +7,8 @@
 //!
 //! - per worker, the case it is computing: its samples × (channels + time) as
 //!   float64, the spectra with their FFT buffers, and the case's encoded record
-//!   (samples × channels + spectra bins, at the stored width) with the encoder's
-//!   scratch;
+//!   (stored samples × stored series + spectra bins, at the stored width) with the
+//!   encoder's scratch;
 //! - the records waiting for the writer: at most two per worker, and the one it writes;
 //! - the ideal references, every channel of each, for the whole run;
 //! - the case table: every case's parameters, their copy in the file's layout and the
@@ -91,6 +91,10 @@ pub struct Shape {
     pub spectra: usize,
     /// Series per case beyond the simulated channels: two per sensor.
     pub sensor_series: usize,
+    /// Series per case the file stores (`output.series`): channels and sensor series.
+    pub stored_series: usize,
+    /// Samples per stored series (`output.decimate` applied).
+    pub stored_samples: u64,
     /// Series and spectra stored as float32.
     pub float32: bool,
     /// Cases in the study.
@@ -150,9 +154,12 @@ impl MemoryEstimate {
             0.0
         };
         let analysis = s * n_f * 8.0 + 3.0 * n_w * 8.0 + 2.0 * n_f * 16.0 + draws;
-        let record = (channels * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
+        // Only the stored series outlive the analysis, at the stored rate.
+        let n_s = shape.stored_samples as f64;
+        let record =
+            (shape.stored_series as f64 * n_s + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
         // The encoder shuffles one series at a time.
-        let scratch = n * width + WORKER_BYTES;
+        let scratch = n_s.max(n_f) * width + WORKER_BYTES;
         // A perturbed replicate's series beside replicate 0's, kept for its horizon.
         let replicate_series = if shape.replicates > 1 { series } else { 0.0 };
         let per_case = series + replicate_series + analysis + record + scratch;
@@ -165,7 +172,7 @@ impl MemoryEstimate {
                     as f64
                     * 8.0)
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
-        let fixed = FIXED_BYTES + (n + n_f) * 8.0;
+        let fixed = FIXED_BYTES + (n + n_s + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
         Self {
             shape,
@@ -194,7 +201,7 @@ impl fmt::Display for MemoryEstimate {
         write!(
             f,
             "{} worker{} x {} per case ({} samples x {} channels as float64, {} spectr{}, \
-             the encoded record), {} records queued for the writer x {}, {} reference{} x {}, \
+             the encoded record of {} stored series x {} samples), {} records queued for the writer x {}, {} reference{} x {}, \
              case table {} cases x {:.0} B = {}, fixed {}",
             self.jobs,
             if self.jobs == 1 { "" } else { "s" },
@@ -203,6 +210,8 @@ impl fmt::Display for MemoryEstimate {
             CHANNELS.len(),
             s.spectra,
             if s.spectra == 1 { "um" } else { "a" },
+            s.stored_series,
+            s.stored_samples,
             2 * self.jobs + 1,
             bytes(self.record),
             s.references,
@@ -444,6 +453,8 @@ mod tests {
             replicates: 0,
             revolutions: 0,
             sensor_series: 0,
+            stored_series: CHANNELS.len(),
+            stored_samples: 20_001,
         }
     }
 
@@ -490,6 +501,8 @@ mod tests {
             window: 999_000_000,
             spectra: 3,
             sensor_series: 0,
+            stored_series: CHANNELS.len(),
+            stored_samples: 1_000_000_001,
             float32: false,
             cases: 1,
             references: 1,
@@ -507,6 +520,8 @@ mod tests {
                 window: 2_000,
                 spectra: 3,
                 sensor_series: 0,
+                stored_series: CHANNELS.len(),
+                stored_samples: 2_501,
                 float32: false,
                 cases: 10_000_000,
                 references: 1,
@@ -527,6 +542,8 @@ mod tests {
             window: 80_000,
             spectra: 3,
             sensor_series,
+            stored_series: CHANNELS.len() + sensor_series,
+            stored_samples: 100_001,
             float32: true,
             cases: 100,
             references: 2,

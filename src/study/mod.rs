@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use crate::mechanism::CaseParams;
 use crate::signal::envelope::EnvelopeSettings;
 use crate::signal::sensor::Sensor;
-use crate::simulate::Sampling;
+use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::SolverSettings;
 
 pub use expand::Effects;
@@ -108,6 +108,9 @@ pub struct Study {
     pub float32: bool,
     /// Deflate level (0 = none).
     pub compression: u8,
+    /// Which series the file stores and at what rate (`output.series`,
+    /// `output.decimate`).
+    pub output: SeriesOutput,
     /// Names of the parameters the grid varies, in expansion order.
     pub axes: Vec<String>,
     /// The cases, in id order.
@@ -123,6 +126,38 @@ pub struct Study {
     /// The most whole crank revolutions any case has in the analysed window: the
     /// length of the file's `revolution` dimension (docs/model.md §6.1).
     pub revolutions: usize,
+}
+
+/// What a study file stores of each case's series (`output.series` and
+/// `output.decimate`, docs/model.md §5.2). Spectra, metrics, envelope analysis and
+/// sensors are computed from the full-rate series whatever is stored.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SeriesOutput {
+    /// The names of the series stored (simulated channels and sensor series), or
+    /// `None` for every series the study simulates (`all`); empty for `none`.
+    pub names: Option<Vec<String>>,
+    /// Every `decimate`-th sample of the output is stored, samples `0, k, 2k, …`
+    /// (≥ 1; 1 stores every sample).
+    pub decimate: usize,
+}
+
+impl Default for SeriesOutput {
+    /// Every series, every sample.
+    fn default() -> Self {
+        Self {
+            names: None,
+            decimate: 1,
+        }
+    }
+}
+
+impl SeriesOutput {
+    /// Whether the series `name` is stored (the study simulating it).
+    pub fn stores(&self, name: &str) -> bool {
+        self.names
+            .as_ref()
+            .is_none_or(|names| names.iter().any(|n| n == name))
+    }
 }
 
 /// A study's `replicates:`: every case runs `count` times, replicate `k ≥ 1` from
@@ -186,6 +221,84 @@ impl Study {
 }
 
 impl Study {
+    /// The indices into [`CHANNELS`] of the simulated channels the file stores, in
+    /// [`CHANNELS`] order: every channel whose `effect` is `None` or on in the study,
+    /// then those `output.series` names.
+    pub fn stored_channels(&self) -> Vec<usize> {
+        self.simulated_channels()
+            .into_iter()
+            .filter(|&k| self.output.stores(CHANNELS[k].name))
+            .collect()
+    }
+
+    /// The indices into [`CHANNELS`] of the channels the study simulates: those whose
+    /// `effect` is `None` or on in the study.
+    pub fn simulated_channels(&self) -> Vec<usize> {
+        let on = self.effects.names();
+        CHANNELS
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.effect.is_none_or(|e| on.contains(&e)))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// The sensor series the file stores, as indices into the list of every
+    /// sensor's noisy then noise-free series (`2 s` and `2 s + 1` for sensor `s`).
+    pub fn stored_sensor_series(&self) -> Vec<usize> {
+        self.sensors
+            .iter()
+            .flat_map(|s| s.specs())
+            .enumerate()
+            .filter(|(_, spec)| self.output.stores(&spec.name))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// Number of series per case the file stores: channels and sensor series.
+    pub fn stored_series_count(&self) -> usize {
+        self.stored_channels().len() + self.stored_sensor_series().len()
+    }
+
+    /// The sample indices the stored series keep: `0, k, 2k, …` below the
+    /// sampling's length (`k` = `output.decimate`).
+    pub fn stored_samples(&self) -> std::iter::StepBy<Range<usize>> {
+        (0..self.sampling.len()).step_by(self.output.decimate)
+    }
+
+    /// The stored series' sample times (s): the output's times at
+    /// [`Study::stored_samples`], bit for bit; empty when no series is stored.
+    pub fn stored_times(&self) -> Vec<f64> {
+        if self.stored_series_count() == 0 {
+            return Vec::new();
+        }
+        let times = self.sampling.times();
+        self.stored_samples().map(|k| times[k]).collect()
+    }
+
+    /// A full-rate series reduced to its stored samples ([`Study::stored_samples`]),
+    /// in place; returned as it is when every sample is stored.
+    pub fn keep_stored_samples(&self, mut series: Vec<f64>) -> Vec<f64> {
+        if self.output.decimate == 1 {
+            return series;
+        }
+        let mut kept = 0;
+        for k in self.stored_samples() {
+            series[kept] = series[k];
+            kept += 1;
+        }
+        series.truncate(kept);
+        series.shrink_to_fit();
+        series
+    }
+
+    /// The stored series' sample rate (Hz): `sample_rate / decimate`.
+    pub fn stored_sample_rate(&self) -> f64 {
+        self.sampling.sample_rate / self.output.decimate as f64
+    }
+}
+
+impl Study {
     /// Reads and validates the grid file at `path` under the default [`Limits`] (half
     /// the memory, all cores).
     pub fn load(path: &Path) -> Result<Self, StudyError> {
@@ -225,6 +338,8 @@ impl Study {
                 spectra: self.spectrum_channels.len()
                     + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
                 sensor_series: 2 * self.sensors.len(),
+                stored_series: self.stored_series_count(),
+                stored_samples: self.stored_times().len() as u64,
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
