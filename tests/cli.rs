@@ -320,6 +320,38 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
+/// A run stopped before its journal's header was whole (killed between creating the
+/// journal and writing it) recorded nothing: `--resume` starts the run afresh, whatever
+/// partial file lies beside it, and gives the uninterrupted result.
+#[test]
+fn resume_of_a_run_stopped_before_its_first_record_starts_afresh() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "race.yaml", RACE);
+    assert!(studyrun(d, &["race.yaml", "-o", "straight.h5", "-q"])
+        .status
+        .success());
+    for header in [&b""[..], &b"studyrun"[..]] {
+        clear_race(d);
+        std::fs::write(d.join("race.h5.journal"), header).unwrap();
+        std::fs::write(d.join("race.h5.partial"), b"not a study file").unwrap();
+        let plain = studyrun(d, &["race.yaml", "-o", "race.h5", "-q"]);
+        assert_eq!(
+            plain.status.code(),
+            Some(1),
+            "without --resume it is refused"
+        );
+        let resumed = studyrun(d, &["race.yaml", "-o", "race.h5", "-q", "--resume"]);
+        assert!(
+            resumed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&resumed.stderr)
+        );
+        assert_same_data(&d.join("race.h5"), &d.join("straight.h5"));
+        assert!(!d.join("race.h5.journal").exists() && !d.join("race.h5.partial").exists());
+    }
+}
+
 /// Runs `studyrun accuracy` with `args` on a 9-ball, 10 ms grid at `location` and
 /// `rpm` written into `dir` (output `acc.h5`), and checks that it succeeds, that each
 /// `(row start, count)` of `rows` begins that many table lines of stdout (the case's

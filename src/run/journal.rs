@@ -364,6 +364,13 @@ pub enum JournalError {
         /// The I/O error.
         source: io::Error,
     },
+    /// The journal ends before its header does: its run was stopped before it
+    /// recorded anything, so nothing is lost by starting over.
+    #[error("the journal {path} ends inside its header")]
+    Unstarted {
+        /// The journal.
+        path: String,
+    },
     /// The journal was written for another study, version, shard or journal format.
     #[error("the journal {path} belongs to a different study, studyrun version or shard; run with --force to start over")]
     Mismatch {
@@ -384,6 +391,11 @@ impl JournalReader {
         let mut got = vec![0u8; want.len() + 1];
         let data = match input.read_exact(&mut got) {
             Ok(()) if got[..want.len()] == want[..] => DataFile::from_code(got[want.len()]),
+            Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => {
+                return Err(JournalError::Unstarted {
+                    path: path.display().to_string(),
+                })
+            }
             _ => None,
         };
         let data = data.ok_or_else(|| JournalError::Mismatch {

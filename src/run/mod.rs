@@ -277,9 +277,14 @@ fn decide_start(
     let exists = check_paths(study, output)?;
     if journal_path.exists() {
         if opts.resume {
-            return Ok(Start::Resume(JournalReader::open(&journal_path, header)?));
-        }
-        if !opts.force {
+            match JournalReader::open(&journal_path, header) {
+                Ok(reader) => return Ok(Start::Resume(reader)),
+                // Its run stopped before it recorded a case: start afresh, as
+                // without a journal.
+                Err(JournalError::Unstarted { .. }) => {}
+                Err(e) => return Err(e.into()),
+            }
+        } else if !opts.force {
             return Err(RunError::Refused(format!(
                 "{} holds an interrupted run; use --resume to continue it or --force to start over",
                 journal_path.display()
