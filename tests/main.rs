@@ -24,6 +24,7 @@ mod ideal_mechanism;
 mod integrators;
 mod interop;
 mod isa;
+mod orders;
 mod parity;
 mod per_revolution;
 mod properties;
