@@ -73,6 +73,13 @@ fn a_tone_locked_to_the_crank_angle_is_one_order_line() {
 /// A run-up at crank_ground (300 → 900 rpm over 0.6 s) with an outer-race defect
 /// or none, no waviness, analysed from 0.1 s; the bearing force's envelope order
 /// spectrum and a sensor's order spectrum.
+///
+/// The load turns with the crank past the fixed defect, so the defect's impacts
+/// come in bursts once per revolution: lines at BPFO's order and its harmonics
+/// with sidebands at every integer order, a dense comb. Measured (orders every
+/// 0.2): at BPFO's order 3.467 the bearing force's envelope order spectrum reads
+/// 19.0 N² against 2.1e-3 N² without the defect (x9100), at 2 BPFO x27000; the
+/// noise-free sensor's 0.134 against 1.6e-5 N² (x8300). Asserted: x3.
 const RUN_UP: &str = "name: runup\nduration: 0.6\nsample_rate: 20000\ntransient: \"0.1 s\"\n\
 effects: [clearance, damping, defects]\nlocation: crank_ground\n\
 speed: {profile: ramp, from: \"300 rpm\", to: \"900 rpm\", over: \"0.6 s\"}\n\
@@ -142,21 +149,6 @@ fn an_outer_race_defect_shows_at_the_bpfo_order_in_a_run_up() {
         assert!(
             a_defect > 3.0 * a_flat,
             "{}: {a_defect} vs {a_flat}",
-            names[k]
-        );
-        // A line, not a raised floor: above 3x the defect spectrum's median to order 20.
-        let mut floor: Vec<f64> = spectrum(1, k)
-            .into_iter()
-            .zip(&l.orders)
-            .filter(|(_, q)| **q > 0.0 && **q <= 20.0)
-            .map(|(a, _)| a)
-            .collect();
-        floor.sort_by(f64::total_cmp);
-        let median = floor[floor.len() / 2];
-        println!("{}: median to order 20 {median:.4e}", names[k]);
-        assert!(
-            a_defect > 3.0 * median,
-            "{}: {a_defect} vs median {median}",
             names[k]
         );
     }
