@@ -219,6 +219,13 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     if let Some(envelope) = &study.envelope {
         attributes.extend(envelope_attributes(envelope, n_window));
     }
+    if let Some(o) = &study.orders {
+        // docs/model.md §7.9: R whole revolutions in M angle samples.
+        attributes.extend([
+            ("order_revolutions".to_string(), (o.revolutions as i64).into()),
+            ("order_samples".to_string(), (o.samples as i64).into()),
+        ]);
+    }
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.sampling.times(),
