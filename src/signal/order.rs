@@ -48,8 +48,9 @@ pub fn whole_revolutions(drive: &CrankDrive, first: f64, last: f64) -> usize {
 /// Where each angle sample of one case's window falls between its time samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AngleResampling {
-    /// Per angle sample `m`: the window sample `i` with `t_i ≤ τ_m < t_{i+1}` and
-    /// `u = (τ_m − t_i)/(t_{i+1} − t_i)` in `[0, 1)`.
+    /// Per angle sample `m`: the window sample `i` with `t_i ≤ τ_m ≤ t_{i+1}` and
+    /// `u = (τ_m − t_i)/(t_{i+1} − t_i)` in `[0, 1]` (1 only where rounding puts `τ_m`
+    /// on the next sample, whose value the cubic then takes).
     at: Vec<(usize, f64)>,
 }
 
@@ -163,7 +164,7 @@ mod tests {
         let resampling = AngleResampling::new(&drive, &times, window.clone(), r, 1000);
         let theta_a = drive.motion(times[200]).angle;
         for (m, &(i, u)) in resampling.at.iter().enumerate() {
-            assert!((0.0..1.0).contains(&u), "m {m}: u {u}");
+            assert!((0.0..=1.0).contains(&u), "m {m}: u {u}");
             let tau = times[200 + i] + u / rate;
             let want = theta_a + TAU * r as f64 * m as f64 / 1000.0;
             assert!(
