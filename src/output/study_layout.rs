@@ -222,7 +222,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     if let Some(o) = &study.orders {
         // docs/model.md §7.9: R whole revolutions in M angle samples.
         attributes.extend([
-            ("order_revolutions".to_string(), (o.revolutions as i64).into()),
+            (
+                "order_revolutions".to_string(),
+                (o.revolutions as i64).into(),
+            ),
             ("order_samples".to_string(), (o.samples as i64).into()),
         ]);
     }
