@@ -49,11 +49,11 @@ pub(crate) struct CaseCost {
 /// sensors (docs/model.md §7.8, made before the analysis, which may read them), the
 /// envelope analysis when the study has one (`envelope`, planned for it), the order
 /// spectra when it asks for them (`orders`, docs/model.md §7.9) and the metrics per
-/// whole crank revolution (docs/model.md §6.1); with replicates, runs its perturbed replicates one
-/// after the other and adds their metrics, statistics and predictability horizon
-/// (docs/model.md §9.5). Never fails: a failure of the case (replicate 0) becomes a
-/// [`Status::Failed`] result with its message; a failed perturbed replicate only
-/// leaves its metrics NaN.
+/// whole crank revolution (docs/model.md §6.1); with replicates, runs its perturbed
+/// replicates one after the other and adds their metrics, statistics and
+/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the case
+/// (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
+/// perturbed replicate only leaves its metrics NaN.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
