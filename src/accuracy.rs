@@ -479,6 +479,8 @@ pub fn write_file(
         replicate_metrics: Vec::new(),
         revolutions: Vec::new(),
         revolution_metrics: Vec::new(),
+        orders: Vec::new(),
+        order_spectra: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
         reference_index: vec![0; ms.len()],

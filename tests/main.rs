@@ -25,6 +25,7 @@ mod integrators;
 mod interop;
 mod isa;
 mod output_selection;
+mod orders;
 mod parity;
 mod per_revolution;
 mod properties;

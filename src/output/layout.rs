@@ -20,6 +20,9 @@ pub const REPLICATE: &str = "replicate";
 /// numbers after the transient, int32), present only in a file with
 /// [`Layout::revolution_metrics`].
 pub const REVOLUTION: &str = "revolution";
+/// Name of the order dimension and its coordinate variable (f64, cycles per crank
+/// revolution), present only in a file with [`Layout::order_spectra`].
+pub const ORDER: &str = "order";
 /// Built-in variable `[case]` i8: the [`Status`] code of each case.
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
@@ -35,13 +38,14 @@ pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
 pub(super) const FORMAT_VERSION: i64 = 1;
 
 /// The names no caller variable may take.
-const RESERVED: [&str; 9] = [
+const RESERVED: [&str; 10] = [
     CASE,
     TIME,
     FREQUENCY,
     REFERENCE,
     REPLICATE,
     REVOLUTION,
+    ORDER,
     STATUS,
     ERROR_MESSAGE,
     REFERENCE_INDEX,
@@ -233,6 +237,7 @@ pub(super) enum Role {
     Metric,
     ReplicateMetric,
     RevolutionMetric,
+    OrderSpectrum,
     Series,
     Spectrum,
     ReferenceParameter,
@@ -240,11 +245,12 @@ pub(super) enum Role {
 }
 
 impl Role {
-    const ALL: [Self; 8] = [
+    const ALL: [Self; 9] = [
         Self::Parameter,
         Self::Metric,
         Self::ReplicateMetric,
         Self::RevolutionMetric,
+        Self::OrderSpectrum,
         Self::Series,
         Self::Spectrum,
         Self::ReferenceParameter,
@@ -258,6 +264,7 @@ impl Role {
             Self::Metric => "metric",
             Self::ReplicateMetric => "replicate_metric",
             Self::RevolutionMetric => "revolution_metric",
+            Self::OrderSpectrum => "order_spectrum",
             Self::Series => "series",
             Self::Spectrum => "spectrum",
             Self::ReferenceParameter => "reference_parameter",
@@ -307,6 +314,12 @@ pub struct Layout {
     /// Per-case, per-revolution results `[case, revolution]`, float64; none without
     /// `revolutions`.
     pub revolution_metrics: Vec<VarSpec>,
+    /// Bin orders of every order spectrum (the `order` coordinate, cycles per crank
+    /// revolution); empty when the file has no order dimension.
+    pub orders: Vec<f64>,
+    /// Per-case order spectra `[case, order]`, float64, held and written whole like
+    /// the per-revolution results; none without `orders`.
+    pub order_spectra: Vec<VarSpec>,
     /// Per-case inputs `[case]`, written at creation.
     pub parameters: Vec<Param>,
     /// Per-reference inputs `[reference]`, written at creation.
@@ -407,11 +420,13 @@ impl Layout {
 
     /// Number of metric values a case record holds: one per [`Layout::metrics`],
     /// then one per replicate for each of [`Layout::replicate_metrics`], then one per
-    /// revolution for each of [`Layout::revolution_metrics`].
+    /// revolution for each of [`Layout::revolution_metrics`], then one per order for
+    /// each of [`Layout::order_spectra`].
     pub fn n_metric_values(&self) -> usize {
         self.metrics.len()
             + self.replicate_metrics.len() * self.replicates.len()
             + self.revolution_metrics.len() * self.revolutions.len()
+            + self.order_spectra.len() * self.orders.len()
     }
 
     /// Checks the layout; the error says what is wrong and names the variable.
@@ -435,6 +450,12 @@ impl Layout {
             return Err(format!(
                 "`{}` needs the `{REVOLUTION}` dimension, which is empty",
                 self.revolution_metrics[0].name
+            ));
+        }
+        if self.orders.is_empty() && !self.order_spectra.is_empty() {
+            return Err(format!(
+                "`{}` needs the `{ORDER}` dimension, which is empty",
+                self.order_spectra[0].name
             ));
         }
         if self.storage.deflate_level > 9 {
@@ -507,6 +528,7 @@ impl Layout {
             .chain(&self.metrics)
             .chain(&self.replicate_metrics)
             .chain(&self.revolution_metrics)
+            .chain(&self.order_spectra)
             .chain(&self.series)
             .chain(&self.spectra)
             .chain(self.reference_parameters.iter().map(|p| &p.spec))
@@ -601,6 +623,8 @@ mod tests {
             replicate_metrics: vec![],
             revolutions: vec![],
             revolution_metrics: vec![],
+            orders: vec![],
+            order_spectra: vec![],
             parameters: vec![Param {
                 spec: VarSpec::new("rpm", "min-1", "crank speed"),
                 values: ParamValues::F64(vec![300.0, 600.0]),

@@ -125,6 +125,8 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 && l.replicates == first.replicates
                 && same_variables(&l.revolution_metrics, &first.revolution_metrics)
                 && l.revolutions == first.revolutions
+                && same_variables(&l.order_spectra, &first.order_spectra)
+                && l.orders == first.orders
                 && same_variables(params(l), params(first))
                 && l.reference_ids == first.reference_ids,
             || {
@@ -180,6 +182,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         metrics: Vec<usize>,
         replicate_metrics: Vec<usize>,
         revolution_metrics: Vec<usize>,
+        order_spectra: Vec<usize>,
         parameters: Vec<usize>,
     }
     let shard_order: Vec<Order> = readers
@@ -194,6 +197,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 metrics: positions(&first.metrics, &l.metrics),
                 replicate_metrics: positions(&first.replicate_metrics, &l.replicate_metrics),
                 revolution_metrics: positions(&first.revolution_metrics, &l.revolution_metrics),
+                order_spectra: positions(&first.order_spectra, &l.order_spectra),
                 parameters: positions(&want, &have),
             }
         })
@@ -282,6 +286,12 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         for &i in &o.revolution_metrics {
             let at = after_replicates + i * n_rev;
             metrics.extend_from_slice(&c.metrics[at..at + n_rev]);
+        }
+        let n_ord = layout.orders.len();
+        let after_revolutions = after_replicates + o.revolution_metrics.len() * n_rev;
+        for &i in &o.order_spectra {
+            let at = after_revolutions + i * n_ord;
+            metrics.extend_from_slice(&c.metrics[at..at + n_ord]);
         }
         writer
             .write_case(

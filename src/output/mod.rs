@@ -14,6 +14,8 @@
 //! | `status` | `[case]` | i8 | `1` | per case: `flag_values` `[0, 1, 2]`, `flag_meanings` `pending ok failed`; fill 0 |
 //! | `error_message` | `[case]` | string | `1` | per case: why it failed, empty otherwise |
 //! | *metric* | `[case]` | f64 | caller's | per case; fill NaN |
+//! | `order` | `[order]` | f64 | `1` | at create, with order spectra: bin orders (cycles per crank revolution) |
+//! | *order spectrum* | `[case, order]` | f64 | caller's | per case, contiguous; fill NaN |
 //! | *series* | `[case, time]` | f64 or f32 | caller's | per case; fill NaN |
 //! | *spectrum* | `[case, frequency]` | f64 or f32 | caller's | per case; fill NaN |
 //! | *reference parameter* | `[reference]` | f64 or string | caller's | at create |
@@ -85,7 +87,7 @@ pub use error::StudyFileError;
 pub use inspect::inspect;
 pub use layout::{
     command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
-    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, REFERENCE, REFERENCE_INDEX, REPLICATE,
+    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
     REVOLUTION, STATUS, TIME,
 };
 pub use lock::OutputLock;

@@ -12,8 +12,8 @@ use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
-    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION,
-    ROLE_ATTR, STATUS, TIME,
+    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
+    REVOLUTION, ROLE_ATTR, STATUS, TIME,
 };
 use super::text::{self, Strings};
 
@@ -154,6 +154,8 @@ impl StudyReader {
             row,
         )?;
         metrics.extend(revolutions.into_iter().flatten());
+        let orders = self.read_rows(&self.rows.order_spectra, &self.layout.order_spectra, row)?;
+        metrics.extend(orders.into_iter().flatten());
         let message = self.messages[row].clone();
         let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
         Ok(CaseData {
@@ -324,6 +326,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
             Err(_) => Vec::new(),
         },
         revolution_metrics: Vec::new(),
+        orders: match file.dataset(ORDER) {
+            Ok(ds) => ds.read_raw::<f64>().at(path, ORDER)?,
+            Err(_) => Vec::new(),
+        },
+        order_spectra: Vec::new(),
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
@@ -358,6 +365,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
             Role::Parameter | Role::Metric => (layout.n_cases(), None),
             Role::ReplicateMetric => (layout.n_cases(), Some(layout.replicates.len())),
             Role::RevolutionMetric => (layout.n_cases(), Some(layout.revolutions.len())),
+            Role::OrderSpectrum => (layout.n_cases(), Some(layout.orders.len())),
             Role::Series => (layout.n_cases(), Some(layout.times.len())),
             Role::Spectrum => (layout.n_cases(), Some(layout.frequencies.len())),
             Role::ReferenceParameter => (layout.n_references(), None),
@@ -378,11 +386,15 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
             Role::Metric => layout.metrics.push(spec),
             Role::ReplicateMetric => layout.replicate_metrics.push(spec),
             Role::RevolutionMetric => layout.revolution_metrics.push(spec),
+            Role::OrderSpectrum => layout.order_spectra.push(spec),
             Role::Series => layout.series.push(spec),
             Role::Spectrum => layout.spectra.push(spec),
             Role::ReferenceSeries => layout.reference_series.push(spec),
         }
-        let contiguous = matches!(role, Role::ReplicateMetric | Role::RevolutionMetric);
+        let contiguous = matches!(
+            role,
+            Role::ReplicateMetric | Role::RevolutionMetric | Role::OrderSpectrum
+        );
         if cols.is_some() && !contiguous && storage_from.is_none() {
             storage_from = Some(ds);
         }

@@ -7,7 +7,7 @@ use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, Envelop
 use crate::signal::replicates::{chaos_specs, replicate_metric_specs, summary_specs};
 use crate::signal::revolutions::revolution_metric_specs;
 use crate::signal::spectrum::frequencies;
-use crate::signal::{envelope_spectrum_specs, metric_specs};
+use crate::signal::{envelope_spectrum_specs, metric_specs, order_spectrum_specs};
 use crate::simulate::CHANNELS;
 use crate::study::params::PARAMETERS;
 use crate::study::Shard;
@@ -227,6 +227,16 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     if let Some(envelope) = &study.envelope {
         attributes.extend(envelope_attributes(envelope, n_window));
     }
+    if let Some(o) = &study.orders {
+        // docs/model.md §7.9: R whole revolutions in M angle samples.
+        attributes.extend([
+            (
+                "order_revolutions".to_string(),
+                (o.revolutions as i64).into(),
+            ),
+            ("order_samples".to_string(), (o.samples as i64).into()),
+        ]);
+    }
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.stored_times(),
@@ -236,13 +246,9 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         spectra: study
             .spectrum_channels
             .iter()
-            .map(|name| {
-                let ch = CHANNELS
-                    .iter()
-                    .find(|c| c.name == *name)
-                    .expect("validated channel");
+            .map(|ch| {
                 VarSpec::new(
-                    format!("{name}_spectrum"),
+                    format!("{}_spectrum", ch.name),
                     ch.units,
                     format!("one-sided amplitude spectrum of {}", ch.long_name),
                 )
@@ -264,6 +270,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         } else {
             Vec::new()
         },
+        orders: study.orders.map_or(Vec::new(), |o| o.orders()),
+        order_spectra: study.orders.map_or(Vec::new(), |o| {
+            order_spectrum_specs(&o, &study.spectrum_channels, study.envelope.as_ref())
+        }),
         parameters,
         reference_parameters,
         reference_series: reference_specs(study),

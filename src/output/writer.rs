@@ -15,7 +15,7 @@ use super::encode::ChunkEncoder;
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
-    FORMAT_VERSION, FREQUENCY, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION, ROLE_ATTR,
+    FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION, ROLE_ATTR,
     STATUS, TIME,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
@@ -38,7 +38,8 @@ pub struct Record<'a, Row: ?Sized> {
     pub spectra: &'a [&'a Row],
     /// One value per [`Layout::metrics`], then, per
     /// [`Layout::replicate_metrics`], one per replicate, then, per
-    /// [`Layout::revolution_metrics`], one per revolution
+    /// [`Layout::revolution_metrics`], one per revolution, then, per
+    /// [`Layout::order_spectra`], one per order
     /// ([`Layout::n_metric_values`] in all).
     pub metrics: &'a [f64],
     /// The case's state.
@@ -161,6 +162,12 @@ impl Scalars {
                     .iter()
                     .zip(&layout.revolution_metrics)
                     .map(|m| (m, layout.revolutions.len())),
+            )
+            .chain(
+                rows.order_spectra
+                    .iter()
+                    .zip(&layout.order_spectra)
+                    .map(|m| (m, layout.orders.len())),
             )
             .map(|((ds, spec), width)| {
                 Ok((
@@ -405,14 +412,16 @@ impl StudyWriter {
             return Err(self.record_error(
                 "metrics",
                 format!(
-                    "{} values for {} metrics, {} replicate metrics x {} replicates and \
-                     {} revolution metrics x {} revolutions",
+                    "{} values for {} metrics, {} replicate metrics x {} replicates, \
+                     {} revolution metrics x {} revolutions and {} order spectra x {} orders",
                     record.metrics.len(),
                     self.layout.metrics.len(),
                     self.layout.replicate_metrics.len(),
                     self.layout.replicates.len(),
                     self.layout.revolution_metrics.len(),
                     self.layout.revolutions.len(),
+                    self.layout.order_spectra.len(),
+                    self.layout.orders.len(),
                 ),
             ));
         }
@@ -629,23 +638,22 @@ impl Creator<'_> {
                 Role::RevolutionMetric,
             ),
         ] {
-            if ids.is_empty() {
-                continue;
+            if !ids.is_empty() {
+                let dim = self.coordinate(name, &ids32(ids), meta, dimid)?;
+                dimid += 1;
+                self.whole_rows(&dim, ids.len(), specs, role, &case)?;
             }
-            let dim = self.coordinate(name, &ids32(ids), meta, dimid)?;
-            dimid += 1;
-            for spec in specs {
-                // Contiguous: written whole, like the `[case]` metrics.
-                let ds = self
-                    .file
-                    .new_dataset::<f64>()
-                    .fill_value(f64::NAN)
-                    .shape([l.n_cases(), ids.len()])
-                    .create(spec.name.as_str())
-                    .at(self.path, &spec.name)?;
-                self.finish_var(&ds, spec, Some(role), &[&case, &dim])?;
-                fill_attr(&ds, false).at(self.path, &spec.name)?;
-            }
+        }
+        if !l.orders.is_empty() {
+            let meta = ("1", "order: cycles per crank revolution");
+            let dim = self.coordinate(ORDER, &l.orders, meta, dimid)?;
+            self.whole_rows(
+                &dim,
+                l.orders.len(),
+                &l.order_spectra,
+                Role::OrderSpectrum,
+                &case,
+            )?;
         }
         // The layout was validated: a file with series has times.
         for spec in &l.series {
@@ -660,6 +668,30 @@ impl Creator<'_> {
         for spec in &l.reference_series {
             let time = time.as_ref().expect("times");
             self.array(spec, Role::ReferenceSeries, &reference, time)?;
+        }
+        Ok(())
+    }
+
+    /// The `[case, dim]` variables `specs` (`len` columns), float64, contiguous:
+    /// written whole, like the `[case]` metrics.
+    fn whole_rows(
+        &self,
+        dim: &Dataset,
+        len: usize,
+        specs: &[VarSpec],
+        role: Role,
+        case: &Dataset,
+    ) -> Result<(), StudyFileError> {
+        for spec in specs {
+            let ds = self
+                .file
+                .new_dataset::<f64>()
+                .fill_value(f64::NAN)
+                .shape([self.layout.n_cases(), len])
+                .create(spec.name.as_str())
+                .at(self.path, &spec.name)?;
+            self.finish_var(&ds, spec, Some(role), &[case, dim])?;
+            fill_attr(&ds, false).at(self.path, &spec.name)?;
         }
         Ok(())
     }

@@ -7,8 +7,8 @@ use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::revolutions::{revolution_metric_specs, revolution_metrics, revolution_windows};
 use crate::signal::spectrum::SpectrumPlan;
-use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis};
-use crate::simulate::{channel_index, simulate, simulate_perturbed, CaseOutput};
+use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis, OrderAnalysis};
+use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
 use crate::study::{Case, Replicates, Study};
 
 /// What one case contributes to the file, owned so it can cross threads.
@@ -29,7 +29,7 @@ pub(crate) struct CaseResult {
     /// One value per [`study_metric_specs`] entry, then per [`replicated_metrics`]
     /// entry one per replicate (NaN where unknown), then per
     /// [`revolution_metric_specs`] entry one per study revolution (NaN past the
-    /// case's last whole revolution): the file's
+    /// case's last whole revolution), then per order spectrum its bins: the file's
     /// [`Record::metrics`](crate::output::Record::metrics).
     pub metrics: Vec<f64>,
     /// What computing the case cost (not stored in the file or the journal).
@@ -46,14 +46,15 @@ pub(crate) struct CaseCost {
 }
 
 /// Simulates `case` at file row `row` and derives spectra and metrics against
-/// `reference` (the ideal mechanism at the same speed), the envelope analysis when
-/// the study has one (`envelope`, planned for it) and the series of the study's
-/// sensors (docs/model.md §7.8) and the metrics per whole crank revolution
-/// (docs/model.md §6.1); with replicates, runs its perturbed replicates one
-/// after the other and adds their metrics, statistics and predictability horizon
-/// (docs/model.md §9.5). Never fails: a failure of the case (replicate 0) becomes a
-/// [`Status::Failed`] result with its message; a failed perturbed replicate only
-/// leaves its metrics NaN.
+/// `reference` (the ideal mechanism at the same speed), the series of the study's
+/// sensors (docs/model.md §7.8, made before the analysis, which may read them), the
+/// envelope analysis when the study has one (`envelope`, planned for it), the order
+/// spectra when it asks for them (`orders`, docs/model.md §7.9) and the metrics per
+/// whole crank revolution (docs/model.md §6.1); with replicates, runs its perturbed
+/// replicates one after the other and adds their metrics, statistics and
+/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the case
+/// (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
+/// perturbed replicate only leaves its metrics NaN.
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
@@ -61,13 +62,15 @@ pub(crate) fn run_case(
     reference: &CaseOutput,
     plan: &mut SpectrumPlan,
     envelope: Option<&mut EnvelopeAnalysis>,
+    orders: Option<&mut OrderAnalysis>,
 ) -> CaseResult {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
     let n_metrics = metric_specs(study.envelope.as_ref()).len();
     let n_values = study_metric_specs(study).len()
         + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len()
-        + study.revolutions * revolution_metric_specs().len();
+        + study.revolutions * revolution_metric_specs().len()
+        + study.order_spectrum_count() * study.orders.map_or(0, |o| o.samples / 2 + 1);
     let params = &case.params;
     let simulated = simulate(params, &study.solver, &study.sampling);
     let cpu_simulated = thread_cpu();
@@ -96,18 +99,30 @@ pub(crate) fn run_case(
         Ok(out) => out,
         Err(message) => return failed(message, cost),
     };
+    let dt = 1.0 / study.sampling.sample_rate;
+    let mut sensor_series = Vec::with_capacity(2 * study.sensors.len());
+    for (index, sensor) in study.sensors.iter().enumerate() {
+        let input = out
+            .channel(sensor.channel)
+            .expect("sensor channels are validated");
+        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
+        sensor_series.extend([noisy, clean]);
+    }
     let analysis = analyse(
         params,
         &out,
+        &sensor_series,
         reference,
         study.analysis_window(),
         &study.spectrum_channels,
         plan,
         envelope,
+        orders,
     );
     let CaseAnalysis {
         spectra,
         mut metrics,
+        order_spectra,
     } = match analysis {
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
@@ -121,7 +136,7 @@ pub(crate) fn run_case(
     let replicates = study
         .replicates
         .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
-    let series = stored_series(study, case, out.channels);
+    let series = stored_series(study, out.channels, sensor_series);
     metrics.push(start.elapsed().as_secs_f64());
     if let Some(r) = replicates {
         metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
@@ -136,6 +151,7 @@ pub(crate) fn run_case(
         metrics.extend(r.values);
     }
     metrics.extend(per_revolution.into_iter().flatten());
+    metrics.extend(order_spectra.into_iter().flatten());
     debug_assert_eq!(metrics.len(), n_values);
     CaseResult {
         row,
@@ -149,27 +165,21 @@ pub(crate) fn run_case(
 }
 
 /// The series of a case the file stores, from its full-rate `channels` (one per
-/// [`crate::simulate::CHANNELS`] entry): the sensors measure the full-rate channels
-/// (docs/model.md §7.8), then only the stored channels and sensor series are kept,
-/// at their stored samples ([`Study::keep_stored_samples`]); the rest is dropped here.
-fn stored_series(study: &Study, case: &Case, mut channels: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
-    let dt = 1.0 / study.sampling.sample_rate;
-    let sensor_series = study.stored_sensor_series();
-    let mut sensors = Vec::with_capacity(sensor_series.len());
-    for (index, sensor) in study.sensors.iter().enumerate() {
-        let wanted = [2 * index, 2 * index + 1].map(|k| sensor_series.contains(&k));
-        if wanted == [false, false] {
-            continue;
-        }
-        let input =
-            &channels[channel_index(sensor.channel).expect("sensor channels are validated")];
-        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
-        for (keep, s) in wanted.into_iter().zip([noisy, clean]) {
-            if keep {
-                sensors.push(study.keep_stored_samples(s));
-            }
-        }
-    }
+/// [`crate::simulate::CHANNELS`] entry) and `sensors` (each sensor's noisy and
+/// noise-free series, docs/model.md §7.8): only the stored channels and sensor series
+/// are kept, at their stored samples ([`Study::keep_stored_samples`]); the rest is
+/// dropped here.
+fn stored_series(
+    study: &Study,
+    mut channels: Vec<Vec<f64>>,
+    sensors: Vec<Vec<f64>>,
+) -> Vec<Vec<f64>> {
+    let wanted = study.stored_sensor_series();
+    let sensors = sensors
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| wanted.contains(k))
+        .map(|(_, s)| study.keep_stored_samples(s));
     study
         .stored_channels()
         .into_iter()
@@ -231,10 +241,12 @@ fn run_replicates(
         if let Ok(a) = analyse(
             &case.params,
             &out,
+            &[],
             reference,
             study.analysis_window(),
             &[],
             plan,
+            None,
             None,
         ) {
             for (m, &j) in chosen.iter().enumerate() {

@@ -38,7 +38,7 @@ use crate::output::{
     DataFile, Layout, OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
-use crate::signal::EnvelopeAnalysis;
+use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
 use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
 use crate::study::Study;
@@ -481,6 +481,9 @@ fn run_pending(
                     EnvelopeAnalysis::new(settings, n_window, work.study.sampling.sample_rate)
                         .expect("window length checked by the layout")
                 });
+                let mut orders = work.study.orders.map(|settings| {
+                    OrderAnalysis::new(settings).expect("window length checked by the layout")
+                });
                 let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
@@ -492,6 +495,7 @@ fn run_pending(
                         reference,
                         &mut plan,
                         envelope.as_mut(),
+                        orders.as_mut(),
                     );
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));

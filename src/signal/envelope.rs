@@ -12,6 +12,7 @@ use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
+use super::channel::AnalysisChannel;
 use super::spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
 
 /// A frequency band `low ≤ f ≤ high` (Hz), both edges included.
@@ -48,8 +49,8 @@ pub enum BandChoice {
 /// The grid's `envelope:` settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnvelopeSettings {
-    /// Channels analysed (names from [`crate::simulate::CHANNELS`]), in grid order.
-    pub channels: Vec<&'static str>,
+    /// Channels analysed (simulated channels or sensor series), in grid order.
+    pub channels: Vec<AnalysisChannel>,
     /// The demodulation band.
     pub band: BandChoice,
 }
@@ -361,6 +362,7 @@ impl EnvelopePlan {
     ) -> Result<(), SpectrumError> {
         if band.low.is_nan() || band.high.is_nan() {
             out.fill(f64::NAN);
+            self.squared.fill(f64::NAN);
             return Ok(());
         }
         self.analytic_signal(band);
@@ -408,6 +410,13 @@ impl EnvelopePlan {
             *o = count as f64 * s4 / (s2 * s2) - 2.0;
         }
         Ok(())
+    }
+
+    /// The squared envelope of the last [`EnvelopePlan::analyse`]: `|z_j|²` in its
+    /// band with its mean removed (`n` values, the channel's units squared; NaN
+    /// with no band).
+    pub fn squared_envelope(&self) -> &[f64] {
+        &self.squared
     }
 
     /// The sample rate the plan was made for (Hz).

@@ -29,7 +29,23 @@ impl FaultFrequencies {
     /// `d_m = (d_i + d_o)/2`. A varying crank speed gives NaN: its lines move with
     /// the speed (a profile that stays at one speed counts as that speed).
     pub fn of(params: &CaseParams) -> Self {
-        let rpm = params.constant_rpm().unwrap_or(f64::NAN);
+        Self::at_rpm(params, params.constant_rpm().unwrap_or(f64::NAN))
+    }
+
+    /// The metric names of [`FaultFrequencies::orders`], in
+    /// [`FaultFrequencies::values`] order.
+    pub const ORDER_NAMES: [&'static str; 4] =
+        ["ftf_order", "bpfo_order", "bpfi_order", "bsf_order"];
+
+    /// The same quantities as orders (cycles per crank revolution, docs/model.md
+    /// §7.3): the frequencies at one revolution per second, 60 rev/min. Every one
+    /// is proportional to the crank speed, so they hold at any speed, varying or not.
+    pub fn orders(params: &CaseParams) -> Self {
+        Self::at_rpm(params, 60.0)
+    }
+
+    /// The frequencies of `params` with the crank at `rpm` (rev/min).
+    fn at_rpm(params: &CaseParams, rpm: f64) -> Self {
         let omega = std::f64::consts::TAU * rpm / 60.0;
         let (wi, wo) = match params.location {
             Location::CrankGround => (omega, 0.0),
@@ -88,7 +104,24 @@ mod tests {
         assert!((g.ftf - 5.0 * d_o / (di + d_o)).abs() < 1e-12);
         assert!((g.bpfo - f.bpfo).abs() < 1e-12 && (g.bpfi - f.bpfi).abs() < 1e-12);
         assert!((g.bsf - f.bsf).abs() < 1e-12);
+        // Orders are the frequencies over the crank's 5 rev/s, and hold for a
+        // run-up too.
+        let o = FaultFrequencies::orders(&p);
+        for (order, hz) in o.values().iter().zip(g.values()) {
+            assert!((order - hz / 5.0).abs() < 1e-12, "{order} vs {hz} Hz");
+        }
+        p.speed = Some(crate::mechanism::SpeedProfile::Ramp {
+            from: 300.0,
+            to: 900.0,
+            over: 1.0,
+        });
+        assert!(FaultFrequencies::of(&p).values().iter().all(|v| v.is_nan()));
+        assert_eq!(FaultFrequencies::orders(&p), o);
         p.location = Location::Ideal;
         assert!(FaultFrequencies::of(&p).values().iter().all(|v| v.is_nan()));
+        assert!(FaultFrequencies::orders(&p)
+            .values()
+            .iter()
+            .all(|v| v.is_nan()));
     }
 }

@@ -1,12 +1,15 @@
 //! A case's signal processing, between [`mod@crate::simulate`] and [`crate::output`]:
 //! the spectra and the vibration metrics of docs/model.md §6–§7 computed from a
 //! case's sampled outputs and the ideal mechanism's, and, when the study asks for
-//! it, the envelope analysis and condition indicators of §7.3–§7.7.
+//! it, the envelope analysis and condition indicators of §7.3–§7.7 and the order
+//! spectra of §7.9, of simulated channels or sensor series.
 
+pub mod channel;
 pub mod envelope;
 pub mod fault_frequencies;
 pub mod indicators;
 pub mod metrics;
+pub mod order;
 pub mod replicates;
 pub mod revolutions;
 pub mod sensor;
@@ -16,12 +19,14 @@ use std::ops::Range;
 
 use crate::mechanism::CaseParams;
 use crate::output::VarSpec;
-use crate::simulate::{CaseOutput, CHANNELS};
+use crate::simulate::CaseOutput;
+use channel::AnalysisChannel;
 use envelope::{EnvelopePlan, EnvelopeSettings};
 use fault_frequencies::FaultFrequencies;
 use indicators::{band_energy, Indicators, INDICATOR_NAMES};
 use metrics::{vibration_metrics, Deviation};
-use spectrum::{frequencies, SpectrumError, SpectrumPlan};
+use order::{AngleResampling, OrderSettings};
+use spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
 
 /// Channels whose deviation from the ideal mechanism is a metric.
 const DEVIATION_CHANNELS: [(&str, &str); 3] = [
@@ -119,25 +124,17 @@ pub fn units_power(units: &str, p: i32) -> String {
         .join(" ")
 }
 
-/// The units of channel `name`.
-fn channel_units(name: &str) -> &'static str {
-    CHANNELS
-        .iter()
-        .find(|c| c.name == name)
-        .map(|c| c.units)
-        .expect("envelope channels are validated")
-}
-
 /// The envelope metric suffixes for the characteristic frequencies' bands.
 const ENVELOPE_BANDS: [&str; 4] = ["ftf", "bpfo", "bpfi", "2bsf"];
 
 /// The metrics `envelope:` adds (docs/model.md §7.3–§7.7): per channel, the
 /// indicators, the band demodulated, its kurtosis and the envelope-spectrum power
-/// around FTF, BPFO, BPFI and 2·BSF; then the characteristic frequencies.
+/// around FTF, BPFO, BPFI and 2·BSF; then the characteristic frequencies, then
+/// their orders.
 pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
     let mut specs = Vec::new();
-    for ch in &settings.channels {
-        let units = channel_units(ch);
+    for c in &settings.channels {
+        let (ch, units) = (&c.name, c.units);
         for (name, dimensional) in INDICATOR_NAMES {
             specs.push(VarSpec::new(
                 format!("{ch}_{name}"),
@@ -184,6 +181,13 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
     for (name, long) in FaultFrequencies::NAMES.iter().zip(long) {
         specs.push(VarSpec::new(*name, "Hz", long));
     }
+    for (name, long) in FaultFrequencies::ORDER_NAMES.iter().zip(long) {
+        specs.push(VarSpec::new(
+            *name,
+            "1",
+            format!("{long} as an order (cycles per crank revolution)"),
+        ));
+    }
     specs
 }
 
@@ -191,11 +195,12 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
 /// channel its envelope spectrum, then its spectral kurtosis.
 pub fn envelope_spectrum_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
     let mut specs = Vec::new();
-    for ch in &settings.channels {
+    for c in &settings.channels {
+        let ch = &c.name;
         specs.extend([
             VarSpec::new(
                 format!("{ch}_envelope_spectrum"),
-                units_power(channel_units(ch), 2),
+                units_power(c.units, 2),
                 format!("one-sided amplitude spectrum of the squared envelope of {ch}"),
             ),
             VarSpec::new(
@@ -206,6 +211,76 @@ pub fn envelope_spectrum_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
         ]);
     }
     specs
+}
+
+/// The per-case order spectra `[case, order]` of a study with `orders`
+/// (docs/model.md §7.9): `<channel>_order_spectrum` per spectrum channel (with
+/// `spectra: {orders: true}`), then `<channel>_envelope_order_spectrum` per envelope
+/// channel (with `envelope: {orders: true}`).
+pub fn order_spectrum_specs(
+    orders: &OrderSettings,
+    spectrum_channels: &[AnalysisChannel],
+    envelope: Option<&EnvelopeSettings>,
+) -> Vec<VarSpec> {
+    let mut specs = Vec::new();
+    if orders.spectra {
+        specs.extend(spectrum_channels.iter().map(|c| {
+            VarSpec::new(
+                format!("{}_order_spectrum", c.name),
+                c.units,
+                format!(
+                    "one-sided amplitude spectrum over crank-angle orders of {}",
+                    c.long_name
+                ),
+            )
+        }));
+    }
+    if let (true, Some(e)) = (orders.envelope, envelope) {
+        specs.extend(e.channels.iter().map(|c| {
+            VarSpec::new(
+                format!("{}_envelope_order_spectrum", c.name),
+                units_power(c.units, 2),
+                format!(
+                    "one-sided amplitude spectrum over crank-angle orders of the squared envelope of {}",
+                    c.name
+                ),
+            )
+        }));
+    }
+    specs
+}
+
+/// The order analysis of a study: its settings and the plan a worker reuses.
+#[derive(Debug)]
+pub struct OrderAnalysis {
+    settings: OrderSettings,
+    /// Periodic Hann spectra of `M` angle samples.
+    plan: SpectrumPlan,
+    /// One channel's angle samples.
+    resampled: Vec<f64>,
+}
+
+impl OrderAnalysis {
+    /// Plans `settings` (`M ≥ 2` angle samples).
+    pub fn new(settings: OrderSettings) -> Result<Self, SpectrumError> {
+        Ok(Self {
+            plan: SpectrumPlan::new(settings.samples, Window::Hann)?,
+            resampled: vec![0.0; settings.samples],
+            settings,
+        })
+    }
+
+    /// The order spectrum of the window's samples `x` resampled by `resampling`.
+    fn spectrum(
+        &mut self,
+        resampling: &AngleResampling,
+        x: &[f64],
+    ) -> Result<Vec<f64>, SpectrumError> {
+        resampling.resample(x, &mut self.resampled);
+        let mut out = vec![0.0; self.plan.bins()];
+        self.plan.amplitude(&self.resampled, &mut out)?;
+        Ok(out)
+    }
 }
 
 /// The envelope analysis of a study: its settings and the plan a worker reuses.
@@ -231,22 +306,29 @@ impl EnvelopeAnalysis {
         })
     }
 
-    /// Appends the envelope spectra and spectral kurtoses of `out`'s channels over
-    /// `window` to `spectra` and their metrics ([`envelope_metric_specs`] order) to
-    /// `metrics`.
+    /// Appends the envelope spectra and spectral kurtoses of the channels (in `out`
+    /// or `sensors`, the case's sensor series) over `window` to `spectra` and their
+    /// metrics ([`envelope_metric_specs`] order) to `metrics`; with `squared`, also
+    /// each channel's squared envelope (mean removed, docs/model.md §7.4) to it.
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &mut self,
         params: &CaseParams,
         out: &CaseOutput,
+        sensors: &[Vec<f64>],
         window: Range<usize>,
         spectra: &mut Vec<Vec<f64>>,
         metrics: &mut Vec<f64>,
+        mut squared: Option<&mut Vec<Vec<f64>>>,
     ) -> Result<(), SpectrumError> {
         let faults = FaultFrequencies::of(params);
         let lines = [faults.ftf, faults.bpfo, faults.bpfi, 2.0 * faults.bsf];
         for ch in &self.settings.channels {
-            let series = &out.channel(ch).expect("envelope channels are validated")[window.clone()];
+            let series = &ch.samples(out, sensors)[window.clone()];
             let env = self.plan.analyse(series, self.settings.band)?;
+            if let Some(squared) = squared.as_mut() {
+                squared.push(self.plan.squared_envelope().to_vec());
+            }
             metrics.extend(Indicators::of(series).values());
             metrics.extend([env.band.low, env.band.high, env.band_kurtosis]);
             metrics.extend(lines.map(|f| band_energy(&env.spectrum, &self.freqs, f)));
@@ -254,6 +336,7 @@ impl EnvelopeAnalysis {
             spectra.push(env.spectral_kurtosis);
         }
         metrics.extend(faults.values());
+        metrics.extend(FaultFrequencies::orders(params).values());
         Ok(())
     }
 }
@@ -266,24 +349,30 @@ pub struct CaseAnalysis {
     /// One value per [`metric_specs`] entry but the last (`wall_time`, which the
     /// caller measures around the whole case).
     pub metrics: Vec<f64>,
+    /// One order spectrum per [`order_spectrum_specs`] entry (none without orders).
+    pub order_spectra: Vec<Vec<f64>>,
 }
 
-/// The spectra of `spectrum_channels` and the metrics of `out` (the case `params`)
-/// against `reference` (the ideal mechanism at the same speed and sample times), over
-/// the analysed `window` of samples; with `envelope`, also its spectra (after the
-/// others) and metrics (before `wall_time`).
+/// The spectra of `spectrum_channels` (in `out` or `sensors`, the case's sensor
+/// series) and the metrics of `out` (the case `params`) against `reference` (the
+/// ideal mechanism at the same speed and sample times), over the analysed `window`
+/// of samples; with `envelope`, also its spectra (after the others) and metrics
+/// (before `wall_time`); with `orders`, the order spectra.
+#[allow(clippy::too_many_arguments)]
 pub fn analyse(
     params: &CaseParams,
     out: &CaseOutput,
+    sensors: &[Vec<f64>],
     reference: &CaseOutput,
     window: Range<usize>,
-    spectrum_channels: &[&str],
+    spectrum_channels: &[AnalysisChannel],
     plan: &mut SpectrumPlan,
     envelope: Option<&mut EnvelopeAnalysis>,
+    orders: Option<&mut OrderAnalysis>,
 ) -> Result<CaseAnalysis, SpectrumError> {
     let mut spectra = Vec::with_capacity(spectrum_channels.len());
     for ch in spectrum_channels {
-        let series = out.channel(ch).expect("spectrum channels are validated");
+        let series = ch.samples(out, sensors);
         let mut amp = vec![0.0; plan.bins()];
         plan.amplitude(&series[window.clone()], &mut amp)?;
         spectra.push(amp);
@@ -312,8 +401,42 @@ pub fn analyse(
         out.stats.events as f64,
         out.stats.switched_at.unwrap_or(f64::NAN),
     ]);
+    let mut squared = Vec::new();
+    let wants_squared = orders.as_ref().is_some_and(|o| o.settings.envelope);
     if let Some(envelope) = envelope {
-        envelope.run(params, out, window, &mut spectra, &mut metrics)?;
+        envelope.run(
+            params,
+            out,
+            sensors,
+            window.clone(),
+            &mut spectra,
+            &mut metrics,
+            wants_squared.then_some(&mut squared),
+        )?;
     }
-    Ok(CaseAnalysis { spectra, metrics })
+    let mut order_spectra = Vec::new();
+    if let Some(orders) = orders {
+        let s = orders.settings;
+        let resampling = AngleResampling::new(
+            &params.drive(),
+            &out.times,
+            window.clone(),
+            s.revolutions,
+            s.samples,
+        );
+        if s.spectra {
+            for ch in spectrum_channels {
+                let x = &ch.samples(out, sensors)[window.clone()];
+                order_spectra.push(orders.spectrum(&resampling, x)?);
+            }
+        }
+        for e in &squared {
+            order_spectra.push(orders.spectrum(&resampling, e)?);
+        }
+    }
+    Ok(CaseAnalysis {
+        spectra,
+        metrics,
+        order_spectra,
+    })
 }

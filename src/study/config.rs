@@ -305,6 +305,8 @@ pub struct SpectraSection {
     pub window: Option<S<String>>,
     /// Channels to transform (default: slider_acceleration, crank_moment, bearing_force).
     pub channels: Option<S<Vec<S<String>>>>,
+    /// Also their order spectra over crank-angle orders (default false).
+    pub orders: Option<S<bool>>,
 }
 
 /// `envelope:` settings.
@@ -316,6 +318,9 @@ pub struct EnvelopeSection {
     /// `[low, high]` frequencies, or `auto` (the fast kurtogram); default `auto`.
     #[serde(default)]
     pub band: Option<S<BandValue>>,
+    /// Also the order spectra of the squared envelopes (default false).
+    #[serde(default)]
+    pub orders: Option<S<bool>>,
 }
 
 /// One entry of `sensors:`: a resonant transducer on a stored series.

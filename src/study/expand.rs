@@ -23,8 +23,11 @@ use crate::bearing::{
 };
 use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
 use crate::output::study_layout;
+use crate::signal::channel::{AnalysisChannel, Source};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
+use crate::signal::order::{whole_revolutions, OrderSettings};
 use crate::signal::revolutions::revolution_count;
+use crate::signal::sensor::{Sensor, CLEAN_SUFFIX};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL};
@@ -467,12 +470,17 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     )?;
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
-    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
+    let sensors = match &file.sensors {
+        Some(list) => sensors::sensors(&ctx, list, &sampling)?,
+        None => Vec::new(),
+    };
+    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), &sensors)?;
     let envelope = file
         .envelope
         .as_ref()
-        .map(|e| envelope_settings(&ctx, e, &sampling, transient))
+        .map(|e| envelope_settings(&ctx, e, &sampling, transient, &sensors))
         .transpose()?;
+    let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
     let revolutions = cases
@@ -492,6 +500,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         window,
         spectrum_channels,
         envelope,
+        orders,
         float32,
         compression,
         axes: axes_names,
@@ -509,10 +518,78 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             .names()
             .map(str::to_string)
             .collect();
-        study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken)?;
+        sensors::check_names(&ctx, list, &sensors, &taken)?;
+        study.sensors = sensors;
     }
     study.output = series_output(&ctx, file.output.as_ref(), &study)?;
     Ok(study)
+}
+
+/// The order analysis the file asks for (`spectra: {orders: true}`,
+/// `envelope: {orders: true}`), or `None`: `R` is the fewest whole revolutions any
+/// case turns between the analysed window's first and last samples (at least one),
+/// `M` the window's sample count (docs/model.md §7.9).
+fn order_settings(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+    transient: f64,
+    cases: &[Case],
+) -> Result<Option<OrderSettings>, StudyError> {
+    let spectra = file.spectra.as_ref().and_then(|s| s.orders.as_ref());
+    let envelope = file.envelope.as_ref().and_then(|e| e.value.orders.as_ref());
+    let asked = |o: Option<&S<bool>>| o.is_some_and(|o| o.value);
+    if !asked(spectra) && !asked(envelope) {
+        return Ok(None);
+    }
+    let (key, field) = match spectra.filter(|o| o.value) {
+        Some(o) => (o, "spectra.orders"),
+        None => (envelope.expect("asked"), "envelope.orders"),
+    };
+    let window = sampling.analysis_window(transient);
+    let (first, last) = (
+        window.start as f64 / sampling.sample_rate,
+        (window.end.max(1) - 1) as f64 / sampling.sample_rate,
+    );
+    let mut fewest: Option<(usize, u64)> = None;
+    for c in cases {
+        let r = whole_revolutions(&c.params.drive(), first, last);
+        if fewest.is_none_or(|(f, _)| r < f) {
+            fewest = Some((r, c.id));
+        }
+    }
+    let (revolutions, id) = fewest.unwrap_or((0, 0));
+    if revolutions == 0 || window.len() < 2 {
+        return Err(ctx.err(
+            Some(at(&key.referenced)),
+            field,
+            format!(
+                "order spectra need at least one whole crank revolution in every case's \
+                 analysed window ({first} s to {last} s); case {id} turns less: lengthen \
+                 `duration` or shorten `transient`"
+            ),
+        ));
+    }
+    Ok(Some(OrderSettings {
+        revolutions,
+        samples: window.len(),
+        spectra: asked(spectra),
+        envelope: asked(envelope),
+    }))
+}
+
+/// How many order spectra per case the file asks for, from its text alone.
+fn order_spectra_asked(file: &GridFile) -> usize {
+    let spectra = file
+        .spectra
+        .as_ref()
+        .filter(|s| s.orders.as_ref().is_some_and(|o| o.value));
+    let envelope = file
+        .envelope
+        .as_ref()
+        .filter(|e| e.value.orders.as_ref().is_some_and(|o| o.value));
+    spectra.map_or(0, |s| s.channels.as_ref().map_or(3, |c| c.value.len()))
+        + envelope.map_or(0, |e| e.value.channels.value.len())
 }
 
 /// `duration` and `sample_rate`, checked.
@@ -715,6 +792,7 @@ fn check_study_memory(
         sensor_series: file.sensors.as_ref().map_or(0, |s| 2 * s.value.len()),
         stored_series: stored_series_bound(file),
         stored_samples: samples.div_ceil(decimate_bound(file)),
+        order_spectra: order_spectra_asked(file),
         float32: file
             .output
             .as_ref()
@@ -932,11 +1010,13 @@ fn transient_of(
     Ok(transient)
 }
 
-/// The spectrum window's name and the channels with spectra.
+/// The spectrum window's name and the channels with spectra (simulated channels or
+/// the series of `sensors`).
 fn spectra_settings(
     ctx: &Ctx<'_>,
     spectra: Option<&SpectraSection>,
-) -> Result<(String, Vec<&'static str>), StudyError> {
+    sensors: &[Sensor],
+) -> Result<(String, Vec<AnalysisChannel>), StudyError> {
     let default = SpectraSection::default();
     let spectra = spectra.unwrap_or(&default);
     let window = match &spectra.window {
@@ -954,12 +1034,15 @@ fn spectra_settings(
         }
     };
     let channels = match &spectra.channels {
-        None => vec!["slider_acceleration", "crank_moment", "bearing_force"],
+        None => ["slider_acceleration", "crank_moment", "bearing_force"]
+            .into_iter()
+            .map(|name| AnalysisChannel::simulated(name).expect("a channel"))
+            .collect(),
         Some(list) => list
             .value
             .iter()
             .enumerate()
-            .map(|(k, c)| channel_named(ctx, c, &format!("spectra.channels[{k}]")))
+            .map(|(k, c)| analysis_channel(ctx, c, &format!("spectra.channels[{k}]"), sensors))
             .collect::<Result<_, _>>()?,
     };
     Ok((window, channels))
@@ -985,6 +1068,55 @@ fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static s
         })
 }
 
+/// The series named by `c` (at `field`): a channel of [`CHANNELS`] or a series of
+/// `sensors` (`<name>` or `<name>_clean`).
+fn analysis_channel(
+    ctx: &Ctx<'_>,
+    c: &S<String>,
+    field: &str,
+    sensors: &[Sensor],
+) -> Result<AnalysisChannel, StudyError> {
+    if let Some(ch) = AnalysisChannel::simulated(&c.value) {
+        return Ok(ch);
+    }
+    for (k, sensor) in sensors.iter().enumerate() {
+        let [noisy, clean] = sensor.specs();
+        for (j, spec) in [noisy, clean].into_iter().enumerate() {
+            if spec.name == c.value {
+                let units = CHANNELS
+                    .iter()
+                    .find(|ch| ch.name == sensor.channel)
+                    .expect("sensor channels are validated")
+                    .units;
+                return Ok(AnalysisChannel {
+                    name: spec.name,
+                    units,
+                    long_name: spec.long_name,
+                    source: Source::Sensor(2 * k + j),
+                });
+            }
+        }
+    }
+    let names: Vec<String> = CHANNELS
+        .iter()
+        .map(|ch| ch.name.to_string())
+        .chain(
+            sensors
+                .iter()
+                .flat_map(|s| [s.name.clone(), format!("{}{CLEAN_SUFFIX}", s.name)]),
+        )
+        .collect();
+    Err(ctx.err(
+        Some(at(&c.referenced)),
+        field,
+        format!(
+            "unknown channel `{}`; expected a simulated channel or a sensor series, one of: {}",
+            c.value,
+            names.join(", ")
+        ),
+    ))
+}
+
 /// The `envelope:` settings: distinct channels, and a band `[low, high]` with
 /// `0 <= low < high <= sample_rate / 2` holding at least one bin of the analysed
 /// window, or `auto` (the default).
@@ -993,6 +1125,7 @@ fn envelope_settings(
     section: &S<EnvelopeSection>,
     sampling: &Sampling,
     transient: f64,
+    sensors: &[Sensor],
 ) -> Result<EnvelopeSettings, StudyError> {
     let list = &section.value.channels;
     if list.value.is_empty() {
@@ -1002,18 +1135,18 @@ fn envelope_settings(
             "at least one channel is needed",
         ));
     }
-    let mut channels: Vec<&'static str> = Vec::new();
+    let mut channels: Vec<AnalysisChannel> = Vec::new();
     for (k, c) in list.value.iter().enumerate() {
         let field = format!("envelope.channels[{k}]");
-        let name = channel_named(ctx, c, &field)?;
-        if channels.contains(&name) {
+        let channel = analysis_channel(ctx, c, &field, sensors)?;
+        if channels.iter().any(|ch| ch.name == channel.name) {
             return Err(ctx.err(
                 Some(at(&c.referenced)),
                 &field,
-                format!("channel `{name}` is listed twice"),
+                format!("channel `{}` is listed twice", channel.name),
             ));
         }
-        channels.push(name);
+        channels.push(channel);
     }
     let band = match &section.value.band {
         None => BandChoice::Auto,

@@ -107,6 +107,9 @@ pub struct Shape {
     pub replicates: u64,
     /// Length of the `revolution` dimension (most whole revolutions of a case).
     pub revolutions: u64,
+    /// Order spectra per case (docs/model.md §7.9), `window / 2 + 1` values each,
+    /// held with the case table like the per-revolution values.
+    pub order_spectra: usize,
 }
 
 /// The memory a run of a study needs at its peak, by part (bytes).
@@ -170,7 +173,8 @@ impl MemoryEstimate {
             * (case_table_bytes()
                 + (replicate_values(shape.replicates) + revolution_values(shape.revolutions))
                     as f64
-                    * 8.0)
+                    * 8.0
+                + shape.order_spectra as f64 * n_f * 8.0)
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_s + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
@@ -455,6 +459,7 @@ mod tests {
             sensor_series: 0,
             stored_series: CHANNELS.len(),
             stored_samples: 20_001,
+            order_spectra: 0,
         }
     }
 
@@ -509,6 +514,7 @@ mod tests {
             design_values: 0,
             replicates: 0,
             revolutions: 0,
+            order_spectra: 0,
         };
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
@@ -528,6 +534,7 @@ mod tests {
                 design_values: 0,
                 replicates: 0,
                 revolutions: 0,
+                order_spectra: 0,
             },
             2,
         );
@@ -550,6 +557,7 @@ mod tests {
             design_values: 0,
             replicates: 0,
             revolutions: 0,
+            order_spectra: 0,
         };
         let (without, with) = (
             MemoryEstimate::of(shape(0), 2),

@@ -22,7 +22,9 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::mechanism::CaseParams;
+use crate::signal::channel::AnalysisChannel;
 use crate::signal::envelope::EnvelopeSettings;
+use crate::signal::order::OrderSettings;
 use crate::signal::sensor::Sensor;
 use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::SolverSettings;
@@ -95,11 +97,15 @@ pub struct Study {
     pub transient: f64,
     /// Spectrum window name: `hann` or `rectangular`.
     pub window: String,
-    /// Channels transformed into spectra (names from [`crate::simulate::CHANNELS`]).
-    pub spectrum_channels: Vec<&'static str>,
+    /// Channels transformed into spectra (simulated channels or sensor series).
+    pub spectrum_channels: Vec<AnalysisChannel>,
     /// The envelope analysis and condition indicators (`envelope:`); none when the
     /// grid has no `envelope:`, and then nothing of it is computed or stored.
     pub envelope: Option<EnvelopeSettings>,
+    /// The order analysis (`spectra: {orders: true}` or `envelope: {orders: true}`,
+    /// docs/model.md §7.9); none when neither asks, and then nothing of it is
+    /// computed or stored.
+    pub orders: Option<OrderSettings>,
     /// The transducers applied to stored series (`sensors:`, docs/model.md §7.8), in
     /// file order; empty when the grid has none, and then nothing of them is
     /// computed or stored.
@@ -340,6 +346,7 @@ impl Study {
                 sensor_series: 2 * self.sensors.len(),
                 stored_series: self.stored_series_count(),
                 stored_samples: self.stored_times().len() as u64,
+                order_spectra: self.order_spectrum_count(),
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
@@ -358,6 +365,14 @@ impl Study {
     /// duration` ([`Sampling::analysis_window`]).
     pub fn analysis_window(&self) -> Range<usize> {
         self.sampling.analysis_window(self.transient)
+    }
+
+    /// Order spectra per case ([`crate::signal::order_spectrum_specs`]).
+    pub fn order_spectrum_count(&self) -> usize {
+        self.orders.map_or(0, |o| {
+            usize::from(o.spectra) * self.spectrum_channels.len()
+                + usize::from(o.envelope) * self.envelope.as_ref().map_or(0, |e| e.channels.len())
+        })
     }
 
     /// The ids of shard `k` of `n` (1-based `k`): cases whose id ≡ k − 1 (mod n),

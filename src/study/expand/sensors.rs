@@ -10,18 +10,52 @@ use crate::study::config::{SensorSection, S};
 use crate::study::units::Dimension;
 use crate::study::StudyError;
 
-/// The sensors of `list` for a study sampled as `sampling`. `taken` holds the names
-/// of every other variable of the study file: neither `<name>` nor `<name>_clean`
-/// may be one of them or another sensor's.
+/// Refuses a sensor of `list` (resolved into `sensors`) whose series `<name>` or
+/// `<name>_clean` is another sensor's or one of `taken`, the names of every other
+/// variable of the study file.
+pub(super) fn check_names(
+    ctx: &Ctx<'_>,
+    list: &S<Vec<S<SensorSection>>>,
+    sensors: &[Sensor],
+    taken: &HashSet<String>,
+) -> Result<(), StudyError> {
+    let mut own: HashSet<String> = HashSet::new();
+    for (k, (entry, sensor)) in list.value.iter().zip(sensors).enumerate() {
+        let name = &sensor.name;
+        let name_at = Some(at(&entry.value.name.referenced));
+        let field = format!("sensors[{k}].name");
+        for series in [name.clone(), format!("{name}{CLEAN_SUFFIX}")] {
+            if taken.contains(&series) {
+                return Err(ctx.err(
+                    name_at,
+                    &field,
+                    format!(
+                        "`{name}` would store the series `{series}`, which is already a \
+                         variable of the study file; choose another name"
+                    ),
+                ));
+            }
+            if !own.insert(series.clone()) {
+                return Err(ctx.err(
+                    name_at,
+                    &field,
+                    format!("`{name}`: the series `{series}` is another sensor's; names must be distinct"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The sensors of `list` for a study sampled as `sampling`; their names are checked
+/// against the study's other variables by [`check_names`].
 pub(super) fn sensors(
     ctx: &Ctx<'_>,
     list: &S<Vec<S<SensorSection>>>,
     sampling: &Sampling,
-    taken: &HashSet<String>,
 ) -> Result<Vec<Sensor>, StudyError> {
     let nyquist = 0.5 * sampling.sample_rate;
     let mut sensors: Vec<Sensor> = Vec::with_capacity(list.value.len());
-    let mut own: HashSet<String> = HashSet::new();
     for (k, entry) in list.value.iter().enumerate() {
         let s = &entry.value;
         let field = |key: &str| format!("sensors[{k}].{key}");
@@ -38,25 +72,6 @@ pub(super) fn sensors(
                      digits or `_`"
                 ),
             ));
-        }
-        for series in [name.clone(), format!("{name}{CLEAN_SUFFIX}")] {
-            if taken.contains(&series) {
-                return Err(ctx.err(
-                    name_at,
-                    &field("name"),
-                    format!(
-                        "`{name}` would store the series `{series}`, which is already a \
-                         variable of the study file; choose another name"
-                    ),
-                ));
-            }
-            if !own.insert(series.clone()) {
-                return Err(ctx.err(
-                    name_at,
-                    &field("name"),
-                    format!("`{name}`: the series `{series}` is another sensor's; names must be distinct"),
-                ));
-            }
         }
         let channel = channel_named(ctx, &s.channel, &field("channel"))?;
         let f_n = ctx.quantity(
