@@ -22,7 +22,8 @@ use std::str::FromStr;
 
 use crate::error::ParamError;
 
-use super::kernel::ContactState;
+use super::kernel::{ContactState, LANES};
+use crate::numeric::simd::{F64x4, Lanes};
 
 /// Which body's surface carries a defect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -172,40 +173,33 @@ pub fn fault_label(defects: &[Defect]) -> String {
 
 /// Where a ball is along a [`Track`]; held fixed over an integrator step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[repr(u8)]
 pub(crate) enum Zone {
     /// Off the defect: no lowering.
     #[default]
-    Outside = 0,
+    Outside,
     /// On a rounded edge: lowering `R_b − √(R_b² − d²)`.
-    Ramp = 1,
+    Ramp,
     /// On the floor: lowering `h_eff`.
-    Floor = 2,
-}
-
-impl Zone {
-    /// The zone of a stored byte (as [`Zone`]'s discriminant).
-    pub(crate) fn of(byte: u8) -> Zone {
-        match byte {
-            1 => Zone::Ramp,
-            2 => Zone::Floor,
-            _ => Zone::Outside,
-        }
-    }
+    Floor,
 }
 
 /// One place where a defect meets balls. Ball `r` (0-based, base angle `α_r`) sits
-/// at the track angle `x = ratio ψ + (per_ball α_r − centre)` (wrapped to `[−π, π)`,
-/// with `ψ` the ball's angle on the inner race `ψ_in` or the outer race `ψ_out`), at
-/// the arc position `s = radius x` (m) from the defect's centre.
+/// at the track angle `x = wrap(ratio ψ) + start_r`, wrapped to `[−π, π)` (with `ψ`
+/// the ball's angle on the inner race `ψ_in` or the outer race `ψ_out`, and
+/// `start_r = per_ball α_r − centre` wrapped there too), at the arc position
+/// `s = radius x` (m) from the defect's centre. Per ball the position is two
+/// additions and at most one turn of wrapping, on [`LANES`] balls at a time.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Track {
     /// Whether `ψ` is `ψ_in` (else `ψ_out`); the slope `∂δ/∂ψ` goes to that race.
     pub inner: bool,
     ratio: f64,
-    /// `per_ball α_r − centre` of each ball that meets it (rad): `per_ball` is 1 on
-    /// a race, 0 on a ball (whose track does not depend on the ball's place).
-    start: Vec<f64>,
+    /// `start_r` of each ball that meets it (rad, in `[−π, π)`), [`LANES`] per
+    /// vector; `per_ball` is 1 on a race, 0 on a ball (whose track does not depend on
+    /// the ball's place). Lanes of balls that do not meet it hold 0.
+    start: Vec<F64x4>,
+    /// All bits set in the lanes of balls that meet it, else 0.
+    meets: Vec<F64x4>,
     /// Arc length per radian of the surface (m): its radius.
     radius: f64,
     /// Number of balls that meet it: all, or 1 (ball 0) for a ball defect.
@@ -223,6 +217,44 @@ pub(crate) struct Track {
     /// `√(h_eff (2 R_b − h_eff))` (m) when the depth limits the ball, `+∞` when the
     /// width does (the ramp reaches the floor only at the centre).
     ramp_end: f64,
+}
+
+/// The zones of [`LANES`] balls on a track as two lane masks (all bits set where
+/// true): on the ramp, on the floor; neither is outside.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct ZoneMasks {
+    pub ramp: F64x4,
+    pub floor: F64x4,
+}
+
+impl ZoneMasks {
+    /// The zone of lane `l`.
+    pub fn zone(&self, l: usize) -> Zone {
+        if self.floor.0[l].to_bits() != 0 {
+            Zone::Floor
+        } else if self.ramp.0[l].to_bits() != 0 {
+            Zone::Ramp
+        } else {
+            Zone::Outside
+        }
+    }
+}
+
+/// `x` (rad, in `[−2π, 2π)`) wrapped to `[−π, π]` by at most one turn.
+#[inline(always)]
+fn wrap_once<V: Lanes>(x: V) -> V {
+    let x = V::splat(-PI).simd_gt(x).bitselect(x + V::splat(TAU), x);
+    x.simd_gt(V::splat(PI)).bitselect(x - V::splat(TAU), x)
+}
+
+/// `x` (rad, any finite angle) wrapped to `[−π, π)`: `x − 2π floor(x/2π + 1/2)`, the
+/// floor by truncation (no libm call; the angles stay far inside the `i64` range).
+#[inline(always)]
+fn wrap(x: f64) -> f64 {
+    let q = x * (1.0 / TAU) + 0.5;
+    let t = q as i64 as f64;
+    let turns = if t > q { t - 1.0 } else { t };
+    x - TAU * turns
 }
 
 impl Track {
@@ -253,12 +285,19 @@ impl Track {
         };
         let track =
             |inner: bool, ratio: f64, per_ball: f64, centre: f64, radius: f64, balls: usize| {
+                let chunks = balls.div_ceil(LANES);
+                let mut start = vec![F64x4::ZERO; chunks];
+                let mut meets = vec![F64x4::ZERO; chunks];
+                for r in 0..balls {
+                    start[r / LANES].0[r % LANES] =
+                        wrap(per_ball * TAU * r as f64 / balls as f64 - centre);
+                    meets[r / LANES].0[r % LANES] = f64::from_bits(u64::MAX);
+                }
                 Track {
                     inner,
                     ratio,
-                    start: (0..balls)
-                        .map(|r| per_ball * TAU * r as f64 / balls as f64 - centre)
-                        .collect(),
+                    start,
+                    meets,
                     radius,
                     balls,
                     half_width,
@@ -285,18 +324,82 @@ impl Track {
         }
     }
 
-    /// Arc position `s` (m) of ball `r` (0-based, below [`Track::balls`]) from the
-    /// defect's centre, in `[−π radius, π radius)` (up to rounding at the ends).
+    /// `wrap(ratio ψ)` (rad) at state `s`: the track angle of a ball with `start_r = 0`.
     #[inline(always)]
-    pub fn position(&self, r: usize, s: &ContactState) -> f64 {
+    pub fn base_angle(&self, s: &ContactState) -> f64 {
         let psi = if self.inner { s.psi_in } else { s.psi_out };
-        let x = self.ratio * psi + self.start[r];
-        // x − 2π floor(x/2π + 1/2), the floor by truncation (no libm call): the
-        // angles stay far inside the i64 range.
-        let q = x * (1.0 / TAU) + 0.5;
-        let t = q as i64 as f64;
-        let turns = if t > q { t - 1.0 } else { t };
-        self.radius * (x - TAU * turns)
+        wrap(self.ratio * psi)
+    }
+
+    /// Arc position `s` (m) of ball `r` (0-based, below [`Track::balls`]) from the
+    /// defect's centre, in `[−π radius, π radius]`, for [`Track::base_angle`] `base`:
+    /// lane `r` of [`Track::positions`], computed alone.
+    pub fn position(&self, r: usize, base: f64) -> f64 {
+        let x = wrap_once(F64x4::splat(base + self.start[r / LANES].0[r % LANES]));
+        self.radius * x.0[0]
+    }
+
+    /// Number of ball vectors ([`LANES`] balls each) the track spans.
+    pub fn chunks(&self) -> usize {
+        self.start.len()
+    }
+
+    /// Arc positions (m) of ball vector `i` for [`Track::base_angle`] `base`.
+    #[inline(always)]
+    pub fn positions<V: Lanes>(&self, i: usize, base: f64) -> V {
+        V::splat(self.radius) * wrap_once(V::splat(base) + V::load(&self.start[i]))
+    }
+
+    /// The zones balls at positions `pos` (m) are in, as lane masks.
+    #[inline(always)]
+    pub fn zone_masks<V: Lanes>(&self, pos: V) -> (V, V) {
+        if self.whole {
+            return (V::zero(), V::splat(f64::from_bits(u64::MAX)));
+        }
+        let inside = V::splat(self.half_width) - pos.abs();
+        let on = inside.simd_gt(V::zero());
+        if !self.rounded {
+            return (V::zero(), on);
+        }
+        let ramp = on & V::splat(self.ramp_end).simd_gt(inside);
+        (ramp, ramp.bitselect(V::zero(), on))
+    }
+
+    /// The lowerings (m) of ball vector `i` at positions `pos` (m) in zones
+    /// `(ramp, floor)`, 0 for balls that do not meet the track, and their margins
+    /// ([`Track::margin`], `+∞` for balls that do not meet it).
+    #[inline(always)]
+    pub fn lowerings<V: Lanes>(&self, i: usize, pos: V, (ramp, floor): (V, V)) -> (V, V) {
+        let meets = V::load(&self.meets[i]);
+        let mut lowering = floor & V::splat(self.floor);
+        if self.whole {
+            return (lowering & meets, V::splat(f64::INFINITY));
+        }
+        let inside = V::splat(self.half_width) - pos.abs();
+        let mut margin = floor.bitselect(inside, -inside);
+        if self.rounded {
+            let ramp_end = V::splat(self.ramp_end);
+            let on_ramp = (ramp & meets).to_array();
+            if on_ramp.iter().any(|m| m.to_bits() != 0) {
+                // Rare (balls on a rounded edge): the ramp's curve lane by lane.
+                let p = pos.to_array();
+                let mut curve = [0.0; LANES];
+                for l in 0..LANES {
+                    if on_ramp[l].to_bits() != 0 {
+                        curve[l] = self.lowering(Zone::Ramp, p[l]).0;
+                    }
+                }
+                lowering = ramp.bitselect(V::load(&F64x4(curve)), lowering);
+            }
+            margin = ramp.bitselect(
+                inside.fast_min(ramp_end - inside),
+                floor.bitselect(inside - ramp_end, -inside),
+            );
+        }
+        (
+            lowering & meets,
+            meets.bitselect(margin, V::splat(f64::INFINITY)),
+        )
     }
 
     /// `ds/dψ` (m/rad).
@@ -338,22 +441,6 @@ impl Track {
                 // d/dpos of R − √(R² − d²) with dd/dpos = −sign(pos).
                 (d * d / (r + root), -pos.signum() * d / root)
             }
-        }
-    }
-
-    /// Signed distance (m along the track) of a ball at `pos` from leaving `zone`:
-    /// positive while `pos` is in it.
-    #[inline(always)]
-    pub fn margin(&self, zone: Zone, pos: f64) -> f64 {
-        if self.whole {
-            return f64::INFINITY;
-        }
-        let inside = self.half_width - pos.abs();
-        match zone {
-            Zone::Outside => -inside,
-            Zone::Ramp => inside.min(self.ramp_end - inside),
-            Zone::Floor if self.rounded => inside - self.ramp_end,
-            Zone::Floor => inside,
         }
     }
 }
@@ -400,6 +487,43 @@ mod tests {
         Track::of(&d, 9, (29.2e-3, 46.6e-3), 8.7e-3).remove(0)
     }
 
+    /// The margin of ball 0 at `pos` (m) held in `zone`, from the lanes.
+    fn margin(t: &Track, zone: Zone, pos: f64) -> f64 {
+        let mask = |on: bool| F64x4::splat(if on { f64::from_bits(u64::MAX) } else { 0.0 });
+        let zones = (mask(zone == Zone::Ramp), mask(zone == Zone::Floor));
+        t.lowerings::<F64x4>(0, F64x4::splat(pos), zones).1 .0[0]
+    }
+
+    #[test]
+    fn lanes_agree_with_the_ball_by_ball_zones_and_lowerings() {
+        for profile in [DefectProfile::Flat, DefectProfile::Rounded] {
+            let t = track(profile, 1e-3, 20e-6);
+            for k in 0..2000 {
+                let base = -PI + TAU * k as f64 / 2000.0;
+                for i in 0..t.chunks() {
+                    let pos = t.positions::<F64x4>(i, base);
+                    let zones = t.zone_masks(pos);
+                    let (low, _) = t.lowerings(i, pos, zones);
+                    let masks = ZoneMasks {
+                        ramp: zones.0,
+                        floor: zones.1,
+                    };
+                    for l in 0..LANES {
+                        let r = i * LANES + l;
+                        if r >= t.balls {
+                            assert_eq!(low.0[l], 0.0);
+                            continue;
+                        }
+                        let p = t.position(r, base);
+                        assert_eq!(p, pos.0[l]);
+                        assert_eq!(masks.zone(l), t.zone(p));
+                        assert_eq!(low.0[l], t.lowering(t.zone(p), p).0);
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn effective_depth_is_what_the_ball_reaches() {
         let r: f64 = 4.35e-3;
@@ -438,7 +562,7 @@ mod tests {
         // 0.5 mm wide, 20 µm deep: the ball reaches 7.2 µm, at the centre only.
         let t = track(DefectProfile::Rounded, 0.5e-3, 20e-6);
         assert_eq!(t.zone(0.0), Zone::Ramp);
-        assert_eq!(t.margin(Zone::Ramp, 0.0), 0.25e-3);
+        assert_eq!(margin(&t, Zone::Ramp, 0.0), 0.25e-3);
         let (centre, slope) = t.lowering(Zone::Ramp, 0.0);
         assert!((centre - t.lowering(Zone::Floor, 0.0).0).abs() < 1e-20);
         assert!(
@@ -453,11 +577,11 @@ mod tests {
             let t = track(profile, 1e-3, 20e-6);
             for pos in [-2e-3, -0.49e-3, -0.2e-3, 0.0, 0.3e-3, 0.499e-3, 0.6e-3] {
                 let z = t.zone(pos);
-                assert!(t.margin(z, pos) >= 0.0, "{profile:?} at {pos}: {z:?}");
+                assert!(margin(&t, z, pos) >= 0.0, "{profile:?} at {pos}: {z:?}");
                 for other in [Zone::Outside, Zone::Ramp, Zone::Floor] {
                     if other != z && (profile == DefectProfile::Rounded || other != Zone::Ramp) {
                         assert!(
-                            t.margin(other, pos) <= 0.0,
+                            margin(&t, other, pos) <= 0.0,
                             "{profile:?} {other:?} at {pos}"
                         );
                     }
@@ -471,7 +595,7 @@ mod tests {
         let t = track(DefectProfile::Flat, TAU * 23.3e-3, 20e-6);
         for pos in [-70e-3, 0.0, 70e-3] {
             assert_eq!(t.zone(pos), Zone::Floor);
-            assert_eq!(t.margin(Zone::Floor, pos), f64::INFINITY);
+            assert_eq!(margin(&t, Zone::Floor, pos), f64::INFINITY);
         }
         assert_eq!(t.lowering(Zone::Floor, 1.0).0, 20e-6);
     }

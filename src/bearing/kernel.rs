@@ -43,7 +43,7 @@ use std::cell::Cell;
 use crate::numeric::simd::{dispatch, F64x4, Isa, LaneTask, Lanes};
 use crate::numeric::trig::{sin_cos4, AffineSinCos};
 
-use super::defect::{Defects, Zone};
+use super::defect::{Defects, Zone, ZoneMasks};
 use super::{BearingParams, CageWeights, DampingModel, RaceWaviness};
 
 /// Width of the kernel's lane chunks (balls per chunk).
@@ -88,9 +88,9 @@ pub struct Regime {
     /// ([`DampingLaw::acting`]: `v_r > 0` for compression-only damping, a positive
     /// total force for two-sided damping).
     acting: Vec<F64x4>,
-    /// The [`Zone`] of ball `r` on defect track `k` at `k N_b + r` (empty without
-    /// defects).
-    zones: Vec<u8>,
+    /// The zones of ball vector `i` on defect track `k` at `k n + i`, for `n` ball
+    /// vectors (empty without defects).
+    zones: Vec<ZoneMasks>,
 }
 
 impl Regime {
@@ -104,9 +104,9 @@ impl Regime {
         self.acting[r / LANES].0[r % LANES].to_bits() != 0
     }
 
-    /// The held zone of the ball at `slot` (`k N_b + r`) on its defect track.
-    fn zone(&self, slot: usize) -> Zone {
-        Zone::of(self.zones[slot])
+    /// The held zone of ball `r` (0-based) on defect track `k`.
+    fn zone(&self, k: usize, r: usize) -> Zone {
+        self.zones[k * self.loaded.len() + r / LANES].zone(r % LANES)
     }
 }
 
@@ -176,10 +176,10 @@ trait LoadRule: Copy {
     fn margin<V: Lanes>(self, margin: V, lane: LaneState<V>, law_switches: bool) -> V;
     /// Whether the rule holds a regime, so that switches have a margin.
     const HELD: bool;
-    /// The zone of the ball at `slot` on its defect track ([`Regime`]'s `zones`),
-    /// given how to find the zone its position puts it in (`natural`, not called
-    /// under a held regime).
-    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone;
+    /// The zones `(ramp, floor)` of the ball vector at `slot` on its defect track
+    /// ([`Regime`]'s `zones`), given how to find the zones their positions put
+    /// them in (`natural`, not called under a held regime).
+    fn zones<V: Lanes>(self, slot: usize, natural: impl FnOnce() -> (V, V)) -> (V, V);
 }
 
 /// One lane vector's contact quantities, for [`LoadRule::margin`].
@@ -201,7 +201,7 @@ struct Natural;
 struct Held<'a> {
     loaded: &'a [F64x4],
     acting: &'a [F64x4],
-    zones: &'a [u8],
+    zones: &'a [ZoneMasks],
 }
 
 impl LoadRule for Natural {
@@ -223,7 +223,7 @@ impl LoadRule for Natural {
     const HELD: bool = false;
 
     #[inline(always)]
-    fn zone(self, _slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
+    fn zones<V: Lanes>(self, _slot: usize, natural: impl FnOnce() -> (V, V)) -> (V, V) {
         natural()
     }
 }
@@ -254,8 +254,9 @@ impl LoadRule for Held<'_> {
     const HELD: bool = true;
 
     #[inline(always)]
-    fn zone(self, slot: usize, _natural: impl FnOnce() -> Zone) -> Zone {
-        Zone::of(self.zones[slot])
+    fn zones<V: Lanes>(self, slot: usize, _natural: impl FnOnce() -> (V, V)) -> (V, V) {
+        let z = &self.zones[slot];
+        (V::load(&z.ramp), V::load(&z.floor))
     }
 }
 
@@ -265,7 +266,7 @@ impl LoadRule for Held<'_> {
 struct Recording<'a> {
     loaded: &'a [Cell<F64x4>],
     acting: &'a [Cell<F64x4>],
-    zones: &'a [Cell<u8>],
+    zones: &'a [Cell<ZoneMasks>],
 }
 
 impl LoadRule for Recording<'_> {
@@ -290,10 +291,13 @@ impl LoadRule for Recording<'_> {
     const HELD: bool = false;
 
     #[inline(always)]
-    fn zone(self, slot: usize, natural: impl FnOnce() -> Zone) -> Zone {
-        let zone = natural();
-        self.zones[slot].set(zone as u8);
-        zone
+    fn zones<V: Lanes>(self, slot: usize, natural: impl FnOnce() -> (V, V)) -> (V, V) {
+        let (ramp, floor) = natural();
+        self.zones[slot].set(ZoneMasks {
+            ramp: ramp.store(),
+            floor: floor.store(),
+        });
+        (ramp, floor)
     }
 }
 
@@ -771,7 +775,7 @@ impl BallSet {
         Regime {
             loaded: vec![F64x4::ZERO; self.dir_cos.len()],
             acting: vec![F64x4::ZERO; self.dir_cos.len()],
-            zones: vec![0; tracks * self.balls],
+            zones: vec![ZoneMasks::default(); tracks * self.dir_cos.len()],
         }
     }
 
@@ -836,21 +840,23 @@ impl BallSet {
             &self.waves,
             (&self.sines[1..], &self.cosines[1..]),
         );
-        let mut margin = f64::INFINITY;
+        let mut margin = V::splat(f64::INFINITY);
         if let Some(defects) = &self.defects {
             for (k, track) in defects.tracks.iter().enumerate() {
-                let offsets = self.offset.iter_mut().flat_map(|v| v.0.iter_mut());
-                for (r, offset) in offsets.take(track.balls).enumerate() {
-                    let pos = track.position(r, s);
-                    let zone = rule.zone(k * self.balls + r, || track.zone(pos));
-                    *offset -= track.lowering(zone, pos).0;
+                let base = track.base_angle(s);
+                for (i, offset) in self.offset[..track.chunks()].iter_mut().enumerate() {
+                    let pos = track.positions::<V>(i, base);
+                    let zones = rule.zones(k * n + i, || track.zone_masks(pos));
+                    let (lowering, distance) = track.lowerings(i, pos, zones);
+                    *offset = (V::load(offset) - lowering).store();
                     if R::HELD {
-                        margin = margin.min(track.margin(zone, pos));
+                        margin = margin.fast_min(distance);
                     }
                 }
             }
         }
         let mut sum = self.sum_with::<V, R, _>(s, rule, Stored(&self.offset[..n]));
+        let margin = margin.to_array().into_iter().fold(f64::INFINITY, f64::min);
         sum.margin = sum.margin.min(margin);
         sum
     }
@@ -971,9 +977,9 @@ impl BallSet {
                 if r >= track.balls {
                     continue;
                 }
-                let pos = track.position(r, s);
+                let pos = track.position(r, track.base_angle(s));
                 let zone = match regime {
-                    Some(held) => held.zone(k * self.balls + r),
+                    Some(held) => held.zone(k, r),
                     None => track.zone(pos),
                 };
                 let (lowering, rate) = track.lowering(zone, pos);
