@@ -85,71 +85,99 @@ pub struct Channel {
     pub units: &'static str,
     /// Human-readable description.
     pub long_name: &'static str,
+    /// The effect (its name in `effects:`) without which the channel is not simulated; `None` for every case.
+    pub effect: Option<&'static str>,
 }
 
 /// The output channels, in file order. For the ideal mechanism the `bearing_*`,
 /// `eccentricity_*` and `loaded_balls` channels are NaN, 0 and 0; compare with its
-/// `crank_ground_force_*` or `crank_rod_force_*` instead.
-pub const CHANNELS: [Channel; 12] = [
+/// `crank_ground_force_*` or `crank_rod_force_*` instead. The `housing_*` channels
+/// exist with the housing effect only, NaN for a case without a housing (the ideal
+/// mechanism).
+pub const CHANNELS: [Channel; 14] = [
     Channel {
         name: "slider_acceleration",
         units: "m s-2",
         long_name: "slider acceleration",
+        effect: None,
     },
     Channel {
         name: "crank_moment",
         units: "N m",
         long_name: "driving moment on the crank (counter-clockwise positive)",
+        effect: None,
     },
     Channel {
         name: "bearing_force",
         units: "N",
         long_name: "bearing equivalent reaction force |F|",
+        effect: None,
     },
     Channel {
         name: "bearing_force_x",
         units: "N",
         long_name: "bearing force on the housing, x",
+        effect: None,
     },
     Channel {
         name: "bearing_force_y",
         units: "N",
         long_name: "bearing force on the housing, y",
+        effect: None,
     },
     Channel {
         name: "eccentricity_x",
         units: "m",
         long_name: "bearing eccentricity (journal minus housing centre), x",
+        effect: None,
     },
     Channel {
         name: "eccentricity_y",
         units: "m",
         long_name: "bearing eccentricity (journal minus housing centre), y",
+        effect: None,
     },
     Channel {
         name: "loaded_balls",
         units: "1",
         long_name: "number of loaded balls",
+        effect: None,
     },
     Channel {
         name: "crank_ground_force_x",
         units: "N",
         long_name: "force on the ground from the crank at the crank-ground joint, x",
+        effect: None,
     },
     Channel {
         name: "crank_ground_force_y",
         units: "N",
         long_name: "force on the ground from the crank at the crank-ground joint, y",
+        effect: None,
     },
     Channel {
         name: "crank_rod_force_x",
         units: "N",
         long_name: "force on the crank from the rod at the crank-rod joint, x",
+        effect: None,
     },
     Channel {
         name: "crank_rod_force_y",
         units: "N",
         long_name: "force on the crank from the rod at the crank-rod joint, y",
+        effect: None,
+    },
+    Channel {
+        name: "housing_acceleration_x",
+        units: "m s-2",
+        long_name: "acceleration of the housing carrying the outer race, x",
+        effect: Some("housing"),
+    },
+    Channel {
+        name: "housing_acceleration_y",
+        units: "m s-2",
+        long_name: "acceleration of the housing carrying the outer race, y",
+        effect: Some("housing"),
     },
 ];
 
@@ -175,6 +203,8 @@ pub fn channel_values(s: &Sample, location: Location) -> [f64; CHANNELS.len()] {
         s.crank_ground_force[1],
         s.crank_rod_force[0],
         s.crank_rod_force[1],
+        s.housing_acceleration[0],
+        s.housing_acceleration[1],
     ]
 }
 

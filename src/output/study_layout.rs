@@ -224,9 +224,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         times: study.sampling.times(),
         frequencies: frequencies(n_window, study.sampling.sample_rate),
         reference_ids: (0..study.references.len() as u64).collect(),
-        series: CHANNELS
-            .iter()
-            .map(|c| VarSpec::new(c.name, c.units, c.long_name))
+        series: study
+            .stored_channels()
+            .into_iter()
+            .map(|c| VarSpec::new(CHANNELS[c].name, CHANNELS[c].units, CHANNELS[c].long_name))
             .chain(study.sensors.iter().flat_map(|s| s.specs()))
             .collect(),
         spectra: study

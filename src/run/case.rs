@@ -20,8 +20,8 @@ pub(crate) struct CaseResult {
     pub status: Status,
     /// Why it failed (empty when ok).
     pub message: String,
-    /// One series per [`crate::simulate::CHANNELS`] entry, then per sensor its
-    /// noisy and its noise-free series (empty when failed).
+    /// One series per [`Study::stored_channels`] entry, then per sensor its noisy
+    /// and its noise-free series (empty when failed).
     pub series: Vec<Vec<f64>>,
     /// One spectrum per study spectrum channel (empty when failed).
     pub spectra: Vec<Vec<f64>>,
@@ -120,13 +120,25 @@ pub(crate) fn run_case(
     let replicates = study
         .replicates
         .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
-    let mut series = out.channels;
+    let mut channels = out.channels;
     let dt = 1.0 / study.sampling.sample_rate;
-    for (index, sensor) in study.sensors.iter().enumerate() {
-        let input = &series[channel_index(sensor.channel).expect("sensor channels are validated")];
-        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
-        series.extend([noisy, clean]);
-    }
+    let measured: Vec<Vec<f64>> = study
+        .sensors
+        .iter()
+        .enumerate()
+        .flat_map(|(index, sensor)| {
+            let c = channel_index(sensor.channel).expect("sensor channels are validated");
+            let (noisy, clean) =
+                sensor.measure(&channels[c], dt, study.analysis_window(), case.id, index);
+            [noisy, clean]
+        })
+        .collect();
+    let mut series: Vec<Vec<f64>> = study
+        .stored_channels()
+        .into_iter()
+        .map(|c| std::mem::take(&mut channels[c]))
+        .collect();
+    series.extend(measured);
     metrics.push(start.elapsed().as_secs_f64());
     if let Some(r) = replicates {
         metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));

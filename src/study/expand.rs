@@ -21,7 +21,7 @@ use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{
     DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
 };
-use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
+use crate::mechanism::{CaseParams, Housing, Location as Site, SpeedProfile};
 use crate::output::study_layout;
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::revolutions::revolution_count;
@@ -42,10 +42,20 @@ pub struct Effects {
     pub gravity: bool,
     /// Localized defects (off: no defects, no defect code in the kernel).
     pub defects: bool,
+    /// The sprung housing at crank_ground (docs/model.md §3.9; off: rigid ground, no
+    /// housing state, no `housing_*` series).
+    pub housing: bool,
 }
 
 impl Effects {
-    const NAMES: [&'static str; 5] = ["clearance", "waviness", "damping", "gravity", "defects"];
+    const NAMES: [&'static str; 6] = [
+        "clearance",
+        "waviness",
+        "damping",
+        "gravity",
+        "defects",
+        "housing",
+    ];
 
     /// The names of the effects that are on.
     pub fn names(&self) -> Vec<&'static str> {
@@ -55,12 +65,22 @@ impl Effects {
             self.damping,
             self.gravity,
             self.defects,
+            self.housing,
         ];
         Self::NAMES
             .iter()
             .zip(on)
             .filter(|(_, o)| *o)
             .map(|(n, _)| *n)
+            .collect()
+    }
+
+    /// The indices into [`CHANNELS`] of the channels simulated under these effects:
+    /// those whose effect is `None` or on, in [`CHANNELS`] order.
+    pub fn channels(&self) -> Vec<usize> {
+        let on = self.names();
+        (0..CHANNELS.len())
+            .filter(|&c| CHANNELS[c].effect.is_none_or(|e| on.contains(&e)))
             .collect()
     }
 
@@ -74,11 +94,16 @@ impl Effects {
             Some(("clearance", self.clearance))
         } else if param.starts_with("defect") {
             Some(("defects", self.defects))
+        } else if HOUSING_PARAMETERS.contains(&param) {
+            Some(("housing", self.housing))
         } else {
             None
         }
     }
 }
+
+/// The parameters of the housing (`housing:`, docs/model.md §3.9).
+const HOUSING_PARAMETERS: [&str; 3] = ["m_h", "k_h", "c_h"];
 
 /// One axis of the expansion: parameter name, its values, and its YAML field.
 type Axis<'a> = (&'a String, &'a S<Vec<S<Scalar>>>, String);
@@ -448,6 +473,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         &sampling,
         total,
         design_values,
+        &effects,
         limits,
     )?;
     if let Some(d) = &sampled {
@@ -467,11 +493,11 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     )?;
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
-    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref())?;
+    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), &effects)?;
     let envelope = file
         .envelope
         .as_ref()
-        .map(|e| envelope_settings(&ctx, e, &sampling, transient))
+        .map(|e| envelope_settings(&ctx, e, &sampling, transient, &effects))
         .transpose()?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
@@ -508,7 +534,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
             .names()
             .map(str::to_string)
             .collect();
-        study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken)?;
+        study.sensors = sensors::sensors(&ctx, list, &study.sampling, &taken, &study.effects)?;
     }
     Ok(study)
 }
@@ -682,6 +708,7 @@ fn check_study_memory(
     sampling: &Sampling,
     total: u64,
     design_values: u64,
+    effects: &Effects,
     limits: &Limits,
 ) -> Result<(), StudyError> {
     let references_bound = resolved
@@ -700,6 +727,7 @@ fn check_study_memory(
     let samples = sampling.len() as u64;
     let shape = Shape {
         samples,
+        channels: effects.channels().len(),
         window: samples,
         spectra: file
             .spectra
@@ -903,6 +931,7 @@ fn transient_of(
 fn spectra_settings(
     ctx: &Ctx<'_>,
     spectra: Option<&SpectraSection>,
+    effects: &Effects,
 ) -> Result<(String, Vec<&'static str>), StudyError> {
     let default = SpectraSection::default();
     let spectra = spectra.unwrap_or(&default);
@@ -926,18 +955,22 @@ fn spectra_settings(
             .value
             .iter()
             .enumerate()
-            .map(|(k, c)| channel_named(ctx, c, &format!("spectra.channels[{k}]")))
+            .map(|(k, c)| channel_named(ctx, c, &format!("spectra.channels[{k}]"), effects))
             .collect::<Result<_, _>>()?,
     };
     Ok((window, channels))
 }
 
-/// The channel of [`CHANNELS`] named by `c` (at `field`).
-fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static str, StudyError> {
-    CHANNELS
+/// The channel of [`CHANNELS`] named by `c` (at `field`), simulated under `effects`.
+fn channel_named(
+    ctx: &Ctx<'_>,
+    c: &S<String>,
+    field: &str,
+    effects: &Effects,
+) -> Result<&'static str, StudyError> {
+    let channel = CHANNELS
         .iter()
         .find(|ch| ch.name == c.value)
-        .map(|ch| ch.name)
         .ok_or_else(|| {
             let names: Vec<&str> = CHANNELS.iter().map(|ch| ch.name).collect();
             ctx.err(
@@ -949,7 +982,20 @@ fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static s
                     names.join(", ")
                 ),
             )
-        })
+        })?;
+    match channel.effect {
+        Some(effect) if !effects.names().contains(&effect) => Err(ctx.err(
+            Some(at(&c.referenced)),
+            field,
+            format!(
+                "channel `{}` is simulated with the {effect} effect only, which is off \
+                 (effects: [{}]); add `{effect}` to `effects` to use it",
+                c.value,
+                effects.names().join(", ")
+            ),
+        )),
+        _ => Ok(channel.name),
+    }
 }
 
 /// The `envelope:` settings: distinct channels, and a band `[low, high]` with
@@ -960,6 +1006,7 @@ fn envelope_settings(
     section: &S<EnvelopeSection>,
     sampling: &Sampling,
     transient: f64,
+    effects: &Effects,
 ) -> Result<EnvelopeSettings, StudyError> {
     let list = &section.value.channels;
     if list.value.is_empty() {
@@ -972,7 +1019,7 @@ fn envelope_settings(
     let mut channels: Vec<&'static str> = Vec::new();
     for (k, c) in list.value.iter().enumerate() {
         let field = format!("envelope.channels[{k}]");
-        let name = channel_named(ctx, c, &field)?;
+        let name = channel_named(ctx, c, &field, effects)?;
         if channels.contains(&name) {
             return Err(ctx.err(
                 Some(at(&c.referenced)),
@@ -1086,6 +1133,7 @@ fn reference_of(p: &CaseParams) -> CaseParams {
     CaseParams {
         location: Site::Ideal,
         bearing: Default::default(),
+        housing: None,
         ..p.clone()
     }
 }
@@ -1103,6 +1151,7 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
         rpm,
         speed,
         gravity,
+        housing: _,
     } = p;
     let crate::mechanism::MechanismParams {
         crank_length,
@@ -1346,6 +1395,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             damping: true,
             gravity: false,
             defects: false,
+            housing: false,
         });
     };
     let mut e = Effects {
@@ -1354,6 +1404,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
         damping: false,
         gravity: false,
         defects: false,
+        housing: false,
     };
     for (k, name) in list.value.iter().enumerate() {
         let slot = match name.value.as_str() {
@@ -1362,6 +1413,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             "damping" => &mut e.damping,
             "gravity" => &mut e.gravity,
             "defects" => &mut e.defects,
+            "housing" => &mut e.housing,
             other => {
                 return Err(ctx.err(
                     Some(at(&name.referenced)),
@@ -1387,6 +1439,9 @@ fn base_case(
     prov: &mut Provenance,
 ) -> Result<CaseParams, StudyError> {
     let mut c = CaseParams::default();
+    if effects.housing {
+        c.housing = Some(Housing::default());
+    }
     if effects.waviness {
         // the paper's Table 2 (docs/model.md §2.8): N_i = N_o = 35, Π_p = 4 µm.
         c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
@@ -1450,6 +1505,22 @@ fn base_case(
         }
         if let Some(list) = &b.defects {
             c.bearing.defects = defects(ctx, list, effects)?;
+        }
+    }
+    if let Some(h) = &file.housing {
+        if !effects.housing {
+            return Err(ctx.err(
+                Some(at(&h.referenced)),
+                "housing",
+                format!(
+                    "the housing effect is off (effects: [{}]); add `housing` to `effects` \
+                     to set it",
+                    effects.names().join(", ")
+                ),
+            ));
+        }
+        for (name, v) in [("m_h", &h.value.m_h), ("k_h", &h.value.k_h), ("c_h", &h.value.c_h)] {
+            set(&mut c, name, v, &format!("housing.{name}"), prov)?;
         }
     }
     match (&file.speed, &file.rpm) {

@@ -85,6 +85,8 @@ pub fn case_table_bytes() -> f64 {
 pub struct Shape {
     /// Samples per case, both ends included.
     pub samples: u64,
+    /// Simulated channels the file stores ([`crate::study::Study::stored_channels`]).
+    pub channels: usize,
     /// Samples in the analysed window (the spectra's length).
     pub window: u64,
     /// Spectrum channels.
@@ -137,11 +139,11 @@ impl MemoryEstimate {
         let n_f = (shape.window / 2 + 1) as f64;
         let s = shape.spectra as f64;
         let simulated = CHANNELS.len() as f64;
-        let channels = simulated + shape.sensor_series as f64;
+        let stored = shape.channels as f64 + shape.sensor_series as f64;
         let width = if shape.float32 { 4.0 } else { 8.0 };
         let jobs_f = jobs.max(1) as f64;
-        // The case's series and their times, float64.
-        let series = (channels + 1.0) * n * 8.0;
+        // The case's series (every channel is simulated) and their times, float64.
+        let series = (simulated + shape.sensor_series as f64 + 1.0) * n * 8.0;
         // Spectra, the FFT's window, input, output and scratch, the metrics' temporaries.
         // A sensor's noise draws are held while its noisy series is made.
         let draws = if shape.sensor_series > 0 {
@@ -150,7 +152,7 @@ impl MemoryEstimate {
             0.0
         };
         let analysis = s * n_f * 8.0 + 3.0 * n_w * 8.0 + 2.0 * n_f * 16.0 + draws;
-        let record = (channels * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
+        let record = (stored * n + s * n_f) * width * (1.0 + 1.0 / 64.0) + 4096.0;
         // The encoder shuffles one series at a time.
         let scratch = n * width + WORKER_BYTES;
         // A perturbed replicate's series beside replicate 0's, kept for its horizon.
@@ -200,7 +202,7 @@ impl fmt::Display for MemoryEstimate {
             if self.jobs == 1 { "" } else { "s" },
             bytes(self.per_case),
             s.samples,
-            CHANNELS.len(),
+            s.channels,
             s.spectra,
             if s.spectra == 1 { "um" } else { "a" },
             2 * self.jobs + 1,
@@ -435,6 +437,7 @@ mod tests {
     fn million_short_cases() -> Shape {
         Shape {
             samples: 20_001,
+            channels: CHANNELS.iter().filter(|c| c.effect.is_none()).count(),
             window: 10_000,
             spectra: 3,
             float32: false,
@@ -487,6 +490,7 @@ mod tests {
     fn a_billion_samples_need_far_more_than_a_terabyte_of_nothing() {
         let shape = Shape {
             samples: 1_000_000_001,
+            channels: CHANNELS.len(),
             window: 999_000_000,
             spectra: 3,
             sensor_series: 0,
@@ -504,6 +508,7 @@ mod tests {
         let small = MemoryEstimate::of(
             Shape {
                 samples: 2_501,
+                channels: CHANNELS.len(),
                 window: 2_000,
                 spectra: 3,
                 sensor_series: 0,
@@ -524,6 +529,7 @@ mod tests {
     fn sensor_series_count_in_each_case_and_record_but_not_in_the_references() {
         let shape = |sensor_series| Shape {
             samples: 100_001,
+            channels: CHANNELS.len(),
             window: 80_000,
             spectra: 3,
             sensor_series,

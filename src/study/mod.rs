@@ -178,6 +178,13 @@ impl Study {
         self.design.as_ref().map(|d| id % d.rows)
     }
 
+    /// The indices into [`crate::simulate::CHANNELS`] of the simulated channels the
+    /// file stores, in that order: every channel whose effect is `None` or on in the
+    /// study ([`Effects::channels`]).
+    pub fn stored_channels(&self) -> Vec<usize> {
+        self.effects.channels()
+    }
+
     /// The parameters that vary between cases: the grid's axes, then the design's.
     pub fn varied(&self) -> Vec<&str> {
         let design = self.design.iter().flat_map(|d| &d.parameters);
@@ -221,6 +228,7 @@ impl Study {
         MemoryEstimate::of(
             memory::Shape {
                 samples: self.sampling.len() as u64,
+                channels: self.stored_channels().len(),
                 window: self.analysis_window().len() as u64,
                 spectra: self.spectrum_channels.len()
                     + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
