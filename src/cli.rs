@@ -453,7 +453,8 @@ fn dry_run(study: &Study, shard: Option<Shard>, limits: &Limits) -> Result<()> {
     let n_freq = (study.analysis_window().len() / 2 + 1) as f64;
     let width = if study.float32 { 4.0 } else { 8.0 };
     let raw = rows.len() as f64
-        * (study.stored_channels().len() as f64 * n_time + study.spectrum_channels.len() as f64 * n_freq)
+        * (study.stored_channels().len() as f64 * n_time
+            + study.spectrum_channels.len() as f64 * n_freq)
         * width;
     let estimate = study.memory_estimate(jobs);
     out!(

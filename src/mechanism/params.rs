@@ -176,7 +176,11 @@ impl Housing {
             }
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {
-            return Err(ParamError::new("housing.c_h", self.damping, "finite and >= 0"));
+            return Err(ParamError::new(
+                "housing.c_h",
+                self.damping,
+                "finite and >= 0",
+            ));
         }
         Ok(())
     }

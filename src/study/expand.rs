@@ -1519,7 +1519,11 @@ fn base_case(
                 ),
             ));
         }
-        for (name, v) in [("m_h", &h.value.m_h), ("k_h", &h.value.k_h), ("c_h", &h.value.c_h)] {
+        for (name, v) in [
+            ("m_h", &h.value.m_h),
+            ("k_h", &h.value.k_h),
+            ("c_h", &h.value.c_h),
+        ] {
             set(&mut c, name, v, &format!("housing.{name}"), prov)?;
         }
     }
