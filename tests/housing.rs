@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use studyrun::mechanism::{CaseParams, Housing, Location, SliderCrank};
-use studyrun::output::StudyReader;
+use studyrun::output::{ParamValues, StudyReader};
 use studyrun::simulate::{simulate, CaseOutput, Sampling, CHANNELS};
 use studyrun::solve::{integrate, Method, SolverSettings};
 use studyrun::study::Study;
@@ -203,10 +203,10 @@ fn run(dir: &Path, name: &str, text: &str) -> StudyReader {
 }
 
 /// A study with the housing stores `housing_acceleration_x/_y` after the other
-/// channels and `m_h`, `k_h`, `c_h` per case (NaN for the ideal case), and its
+/// channels (NaN for the ideal case) and `m_h`, `k_h`, `c_h` per case, and its
 /// series equal the case simulated in this process bit for bit; a study without
-/// stores neither series, and its crank_ground series are bit for bit those of the
-/// case simulated without a housing.
+/// stores none of these, and its series are bit for bit those of the case
+/// simulated without a housing.
 #[test]
 fn the_file_stores_the_housing_series_only_with_the_effect() {
     let dir = tempfile::tempdir().unwrap();
@@ -224,6 +224,22 @@ fn the_file_stores_the_housing_series_only_with_the_effect() {
     let all: Vec<String> = CHANNELS.iter().map(|c| c.name.to_string()).collect();
     assert_eq!(names(&with), all);
     assert_eq!(names(&without), all[..all.len() - 2]);
+    let parameter = |r: &StudyReader, name: &str| -> Option<Vec<f64>> {
+        r.layout()
+            .parameters
+            .iter()
+            .find(|p| p.spec.name == name)
+            .map(|p| match &p.values {
+                ParamValues::F64(v) => v.clone(),
+                other => panic!("{name}: {other:?}"),
+            })
+    };
+    assert_eq!(parameter(&with, "m_h"), Some(vec![0.8, 0.8]));
+    assert_eq!(parameter(&with, "k_h"), Some(vec![5e7, 5e7]));
+    assert_eq!(parameter(&with, "c_h"), Some(vec![400.0, 400.0]));
+    for name in ["m_h", "k_h", "c_h"] {
+        assert_eq!(parameter(&without, name), None, "{name}");
+    }
 
     let study = Study::from_yaml(&with_text, Path::new("with.yaml")).unwrap();
     let params = &study.cases[0].params;

@@ -84,6 +84,14 @@ impl Effects {
             .collect()
     }
 
+    /// The parameters a study file records per case: every one of [`PARAMETERS`]
+    /// but the housing's (`m_h`, `k_h`, `c_h`) while the housing effect is off.
+    pub fn recorded_parameters(&self) -> impl Iterator<Item = &'static ParamDef> + '_ {
+        PARAMETERS
+            .iter()
+            .filter(|p| self.housing || !HOUSING_PARAMETERS.contains(&p.name))
+    }
+
     /// The effect a parameter belongs to, if switching that effect off forbids it.
     fn governing(&self, param: &str) -> Option<(&'static str, bool)> {
         if param.contains("waviness") {
