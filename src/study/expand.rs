@@ -479,8 +479,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         &file,
         &resolved,
         &sampling,
-        total,
-        design_values,
+        (total, design_values),
         &effects,
         limits,
     )?;
@@ -714,8 +713,7 @@ fn check_study_memory(
     file: &GridFile,
     resolved: &[Vec<ResolvedAxis<'_>>],
     sampling: &Sampling,
-    total: u64,
-    design_values: u64,
+    (total, design_values): (u64, u64),
     effects: &Effects,
     limits: &Limits,
 ) -> Result<(), StudyError> {
