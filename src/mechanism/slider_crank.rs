@@ -299,10 +299,10 @@ struct Accelerations {
 /// docs/model.md §4.4 (§3.8).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Energy {
-    /// Kinetic energy of crank, rod and slider (J).
+    /// Kinetic energy of crank, rod and slider, and of the housing when there is one (J).
     pub kinetic: f64,
     /// Potential energy: the bearing's Hertz potential (natural law) plus gravity's
-    /// when on (J).
+    /// when on and the housing springs' when there is a housing (J).
     pub potential: f64,
     /// The bearing's Hertz potential `Σ 0.4 K δ_r^{5/2}` over the loaded balls (J).
     pub contact_potential: f64,
@@ -372,8 +372,8 @@ struct Kinematics {
 }
 
 /// The slider-crank case in minimal coordinates; implements [`OdeSystem`] for the
-/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s) and has no state for
-/// [`Location::Ideal`].
+/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s, then a housing's
+/// `(hx, hy, ḣx, ḣy)` when there is one) and has no state for [`Location::Ideal`].
 #[derive(Debug, Clone)]
 pub struct SliderCrank {
     location: Location,
