@@ -554,6 +554,22 @@ mod tests {
         assert_eq!(with.references, without.references);
     }
 
+    /// The housing's two channels, simulated in every case's series either way, are
+    /// in the record only when the file stores them.
+    #[test]
+    fn stored_channels_count_in_the_record_only() {
+        let plain = million_short_cases();
+        let housing = Shape {
+            channels: plain.channels + 2,
+            ..plain
+        };
+        let (a, b) = (MemoryEstimate::of(plain, 2), MemoryEstimate::of(housing, 2));
+        let record = 2.0 * 20_001.0 * 8.0 * (1.0 + 1.0 / 64.0);
+        assert!((b.record - a.record - record).abs() < 1e-6);
+        assert_eq!(b.references, a.references);
+        assert!((b.per_case - a.per_case - record).abs() < 1e-6);
+    }
+
     #[test]
     fn byte_counts_read_as_people_write_them() {
         assert_eq!(bytes(800.0), "800 B");
