@@ -329,6 +329,17 @@ fn housing_acceleration(housing: &Housing, f: [f64; 2], h: [f64; 2], hd: [f64; 2
     ]
 }
 
+/// The journal centre's displacement `p = e + h` (m) and velocity (m/s) at state `y`
+/// of a bearing case with `housing`, which the crank pivot follows: `e` and `ė`
+/// without a housing (§3.9).
+#[inline(always)]
+fn journal(housing: &Option<Housing>, y: &[f64]) -> ([f64; 2], [f64; 2]) {
+    match housing {
+        None => ([y[0], y[1]], [y[2], y[3]]),
+        Some(_) => ([y[0] + y[4], y[1] + y[5]], [y[2] + y[6], y[3] + y[7]]),
+    }
+}
+
 /// The bearing at its location.
 #[derive(Debug, Clone)]
 struct Bearing {
@@ -479,17 +490,6 @@ impl SliderCrank {
         4 + self.housing.map_or(0, |_| HOUSING_LEN)
     }
 
-    /// The journal centre's displacement `p = e + h` (m) and velocity (m/s) at state
-    /// `y` of a bearing case, which the crank pivot follows: `e` and `ė` without a
-    /// housing (§3.9).
-    #[inline(always)]
-    fn journal(&self, y: &[f64]) -> ([f64; 2], [f64; 2]) {
-        match self.housing {
-            None => ([y[0], y[1]], [y[2], y[3]]),
-            Some(_) => ([y[0] + y[4], y[1] + y[5]], [y[2] + y[6], y[3] + y[7]]),
-        }
-    }
-
     /// Writes the rates of `(ex, ey, ėx, ėy)` and, with a housing, of
     /// `(hx, hy, ḣx, ḣy)` into `dydt` for the journal's acceleration `pdd` (m/s²)
     /// under bearing force `f` (N): `ë = p̈` without a housing, else `p̈ − ḧ` (§3.9).
@@ -527,7 +527,7 @@ impl SliderCrank {
         let crank = motion.angle;
         let (e, ed, p, pd) = match self.bearing {
             Some(_) => {
-                let (p, pd) = self.journal(y);
+                let (p, pd) = journal(&self.housing, y);
                 ([y[0], y[1]], [y[2], y[3]], p, pd)
             }
             None => ([0.0; 2], [0.0; 2], [0.0; 2], [0.0; 2]),
@@ -568,7 +568,7 @@ impl SliderCrank {
         let motion = self.drive.motion(t);
         let crank = motion.angle;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
-        let (p, pd) = self.journal(y);
+        let (p, pd) = journal(&self.housing, y);
         let kin = self.k.kinematics::<true>(crank.sin_cos(), &motion, p, pd)?;
         Ok((self.contact_state(crank, &kin, e, ed), crank))
     }
@@ -713,10 +713,7 @@ impl SliderCrank {
             unreachable!("a bearing case has 4 state variables")
         };
         let (e, ed) = ([ex, ey], [vx, vy]);
-        let (p, pd) = match self.housing {
-            None => (e, ed),
-            Some(_) => ([ex + y[4], ey + y[5]], [vx + y[6], vy + y[7]]),
-        };
+        let (p, pd) = journal(&self.housing, y);
         let regime = held.then_some(&w.regime);
         let (kin, sum) = match self.location {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
@@ -1033,7 +1030,7 @@ mod tests {
 
         let k = mech.k;
         let motion = mech.drive.motion(t);
-        let (p, pd) = mech.journal(&y);
+        let (p, pd) = journal(&mech.housing, &y);
         let kin = k
             .kinematics::<true>(motion.angle.sin_cos(), &motion, p, pd)
             .unwrap();
