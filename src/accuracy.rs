@@ -360,7 +360,6 @@ pub fn write_file(
     use crate::output::{
         provenance, CaseRecord, Layout, Param, ParamValues, Status, Storage, StudyWriter, VarSpec,
     };
-    use crate::study::params::PARAMETERS;
     let case = |m: &Measurement| &study.cases[m.case].params;
     let reference_of = |m: &Measurement| {
         references
@@ -409,7 +408,7 @@ pub fn write_file(
             &|m| reference_of(m).metric_uncertainty[c],
         ));
     }
-    for p in PARAMETERS {
+    for p in study.effects.recorded_parameters() {
         parameters.push(f64_param(
             p.name,
             p.dimension.base_unit(),

@@ -91,8 +91,10 @@ pub struct Channel {
 
 /// The output channels, in file order. For the ideal mechanism the `bearing_*`,
 /// `eccentricity_*` and `loaded_balls` channels are NaN, 0 and 0; compare with its
-/// `crank_ground_force_*` or `crank_rod_force_*` instead.
-pub const CHANNELS: [Channel; 12] = [
+/// `crank_ground_force_*` or `crank_rod_force_*` instead. The `housing_*` channels
+/// exist with the housing effect only, NaN for a case without a housing (the ideal
+/// mechanism).
+pub const CHANNELS: [Channel; 14] = [
     Channel {
         name: "slider_acceleration",
         units: "m s-2",
@@ -165,6 +167,18 @@ pub const CHANNELS: [Channel; 12] = [
         long_name: "force on the crank from the rod at the crank-rod joint, y",
         effect: None,
     },
+    Channel {
+        name: "housing_acceleration_x",
+        units: "m s-2",
+        long_name: "acceleration of the housing carrying the outer race, x",
+        effect: Some("housing"),
+    },
+    Channel {
+        name: "housing_acceleration_y",
+        units: "m s-2",
+        long_name: "acceleration of the housing carrying the outer race, y",
+        effect: Some("housing"),
+    },
 ];
 
 /// Index of a channel in [`CHANNELS`] by name.
@@ -189,6 +203,8 @@ pub fn channel_values(s: &Sample, location: Location) -> [f64; CHANNELS.len()] {
         s.crank_ground_force[1],
         s.crank_rod_force[0],
         s.crank_rod_force[1],
+        s.housing_acceleration[0],
+        s.housing_acceleration[1],
     ]
 }
 

@@ -12,8 +12,9 @@ use std::path::Path;
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
     BearingSection, DefectSection, DesignParameter, DesignSection, EnvelopeSection,
-    GeometrySection, GridFile, HarmonicSection, MechanismSection, NoiseSection, OutputSection,
-    ReplicatesSection, SensorSection, SolverSection, SpectraSection, SpeedSection, WavinessSection,
+    GeometrySection, GridFile, HarmonicSection, HousingSection, MechanismSection, NoiseSection,
+    OutputSection, ReplicatesSection, SensorSection, SolverSection, SpectraSection, SpeedSection,
+    WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -237,6 +238,7 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<GridFile>(""));
     expected.extend(keys_of::<MechanismSection>("mechanism."));
     expected.extend(keys_of::<BearingSection>("bearing."));
+    expected.extend(keys_of::<HousingSection>("housing."));
     // inner_waviness and outer_waviness take the same keys; the document says so once.
     expected.extend(keys_of::<WavinessSection>("bearing.waviness."));
     expected.extend(keys_of::<HarmonicSection>("bearing.waviness.harmonics[]."));
@@ -286,6 +288,7 @@ fn the_units_table_lists_what_each_quantity_accepts() {
         Dimension::Length,
         Dimension::Speed,
         Dimension::Stiffness,
+        Dimension::SpringStiffness,
         Dimension::Damping,
         Dimension::InverseSpeed,
         Dimension::Time,

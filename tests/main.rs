@@ -20,6 +20,7 @@ mod grid;
 mod hard_cases;
 mod harris;
 mod hdf5_file;
+mod housing;
 mod ideal_mechanism;
 mod integrators;
 mod interop;

@@ -90,6 +90,7 @@ fn case() -> impl Strategy<Value = CaseParams> {
                     rpm: ln_rpm.exp(),
                     speed: None,
                     gravity,
+                    housing: None,
                 }
             },
         )
@@ -199,5 +200,6 @@ fn stress_case() -> CaseParams {
         rpm: 3390.0,
         speed: None,
         gravity: true,
+        housing: None,
     }
 }

@@ -31,9 +31,19 @@ pub struct CartesianSliderCrank {
 }
 
 impl CartesianSliderCrank {
-    /// Builds the case; refuses invalid parameters with the field named.
+    /// Builds the case; refuses invalid parameters with the field named, and a
+    /// bearing case with a housing (docs/model.md §3.9), which only the production
+    /// [`super::SliderCrank`] simulates.
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
+        if case.housing.is_some() && case.location != Location::Ideal {
+            return Err(ParamError::new(
+                "effects",
+                "housing",
+                "without housing in the Cartesian reference model (only the production \
+                 model simulates the housing)",
+            ));
+        }
         let mp = &case.mechanism;
         let (l2, l3) = (mp.crank_length, mp.rod_length);
         let bodies = vec![
@@ -269,6 +279,7 @@ impl CartesianSliderCrank {
             crank_rod_force: joint(self.crank_rod_row).unwrap_or(reaction.force),
             eccentricity: reaction.eccentricity,
             loaded_balls: reaction.loaded_balls,
+            housing_acceleration: [f64::NAN; 2],
         }
     }
 }

@@ -11,6 +11,6 @@ mod speed;
 
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
-pub use params::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
+pub use params::{CaseParams, Housing, Location, MechanismParams, Sample, GRAVITY};
 pub use slider_crank::{Energy, SliderCrank};
 pub use speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};

@@ -137,6 +137,53 @@ pub struct CaseParams {
     pub speed: Option<SpeedProfile>,
     /// Gravity along −y ([`GRAVITY`]) when true.
     pub gravity: bool,
+    /// The sprung housing the outer race sits in (docs/model.md §3.9); `None` for
+    /// the rigid ground. Only at [`Location::CrankGround`]; the ideal mechanism
+    /// ignores it.
+    pub housing: Option<Housing>,
+}
+
+/// The housing of docs/model.md §3.9: a mass on springs and dampers, the same in x
+/// and y, carrying the outer race at crank_ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Housing {
+    /// Mass `m_h` (kg).
+    pub mass: f64,
+    /// Stiffness `k_h` of its support in x and in y (N/m).
+    pub stiffness: f64,
+    /// Viscous damping `c_h` of its support in x and in y (N s/m).
+    pub damping: f64,
+}
+
+impl Default for Housing {
+    /// 1 kg on 1e8 N/m and 400 N s/m: a resonance `√(k_h/m_h)/2π` ≈ 1.59 kHz
+    /// damped at 2 % of critical.
+    fn default() -> Self {
+        Self {
+            mass: 1.0,
+            stiffness: 1e8,
+            damping: 400.0,
+        }
+    }
+}
+
+impl Housing {
+    /// Checks every field; the error names the field, its value and what is allowed.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        for (name, v) in [("housing.m_h", self.mass), ("housing.k_h", self.stiffness)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(ParamError::new(name, v, "finite and > 0"));
+            }
+        }
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            return Err(ParamError::new(
+                "housing.c_h",
+                self.damping,
+                "finite and >= 0",
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for CaseParams {
@@ -149,6 +196,7 @@ impl Default for CaseParams {
             rpm: 300.0,
             speed: None,
             gravity: false,
+            housing: None,
         }
     }
 }
@@ -182,6 +230,17 @@ impl CaseParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.mechanism.validate()?;
+        if let Some(h) = &self.housing {
+            if self.location == Location::CrankRod {
+                return Err(ParamError::new(
+                    "location",
+                    self.location,
+                    "crank_ground or ideal with the housing effect (effects: [..., housing]): \
+                     the sprung housing carries the outer race at crank_ground only",
+                ));
+            }
+            h.validate()?;
+        }
         if self.location != Location::Ideal {
             self.bearing.validate()?;
             let slack = self.mechanism.rod_length - self.mechanism.crank_length;
@@ -225,6 +284,9 @@ pub struct Sample {
     pub eccentricity: [f64; 2],
     /// Number of loaded balls (0 for the ideal mechanism).
     pub loaded_balls: usize,
+    /// The housing's acceleration `ḧ` (m/s², global; NaN without a housing,
+    /// docs/model.md §3.9).
+    pub housing_acceleration: [f64; 2],
 }
 
 impl Sample {

@@ -18,8 +18,14 @@
 //! force on the rod from the crank from the rod-and-slider's x balance and the rod's
 //! moment balance about the slider pin, the ground reaction from the crank's balance.
 //!
+//! With a housing (docs/model.md §3.9, crank_ground only) the outer race sits in a
+//! mass on springs and dampers displaced `h` from its rest position: the state is
+//! `(ex, ey, ėx, ėy, hx, hy, ḣx, ḣy)`, the crank pivot sits at `p = e + h`, and the
+//! equations above give `p̈` for the bearing force `F` on the housing; then
+//! `m_h ḧ = F − k_h h − c_h ḣ` and `ë = p̈ − ḧ`. The contact sees `e` and `ė` alone.
+//!
 //! With [`SliderCrank::with_energy_ledger`] three quadratures ride along in the
-//! state, `(W_driver, ∫∂V/∂t dt, E_dissipated)` after `(ex, ey, ėx, ėy)`, for the
+//! state, `(W_driver, ∫∂V/∂t dt, E_dissipated)` after the mechanism's, for the
 //! energy balance of docs/model.md §4.4 (§3.8); off by default, and a run without it
 //! evaluates exactly what it did before the ledger existed.
 //!
@@ -40,7 +46,7 @@ use crate::multibody::Ledger;
 use crate::numeric::simd::{dispatch, Isa, LaneTask, Lanes};
 use crate::solve::OdeSystem;
 
-use super::{CaseParams, CrankDrive, CrankMotion, Location, Sample, GRAVITY};
+use super::{CaseParams, CrankDrive, CrankMotion, Housing, Location, Sample, GRAVITY};
 
 /// Mechanism constants of the reduced equations (SI).
 #[derive(Debug, Clone, Copy)]
@@ -293,10 +299,10 @@ struct Accelerations {
 /// docs/model.md §4.4 (§3.8).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Energy {
-    /// Kinetic energy of crank, rod and slider (J).
+    /// Kinetic energy of crank, rod and slider, and of the housing when there is one (J).
     pub kinetic: f64,
     /// Potential energy: the bearing's Hertz potential (natural law) plus gravity's
-    /// when on (J).
+    /// when on and the housing springs' when there is a housing (J).
     pub potential: f64,
     /// The bearing's Hertz potential `Σ 0.4 K δ_r^{5/2}` over the loaded balls (J).
     pub contact_potential: f64,
@@ -304,6 +310,35 @@ pub struct Energy {
 
 /// Number of energy-ledger quadratures appended to the state.
 const LEDGER_LEN: usize = 3;
+
+/// Number of state variables of a housing, `(hx, hy, ḣx, ḣy)`.
+const HOUSING_LEN: usize = 4;
+
+/// The housing's acceleration `ḧ = (F − k_h h − c_h ḣ)/m_h` (m/s²) under bearing
+/// force `f` (N) at displacement `h` (m) and velocity `hd` (m/s) (§3.9).
+#[inline(always)]
+fn housing_acceleration(housing: &Housing, f: [f64; 2], h: [f64; 2], hd: [f64; 2]) -> [f64; 2] {
+    let Housing {
+        mass,
+        stiffness,
+        damping,
+    } = *housing;
+    [
+        (f[0] - stiffness * h[0] - damping * hd[0]) / mass,
+        (f[1] - stiffness * h[1] - damping * hd[1]) / mass,
+    ]
+}
+
+/// The journal centre's displacement `p = e + h` (m) and velocity (m/s) at state `y`
+/// of a bearing case with `housing`, which the crank pivot follows: `e` and `ė`
+/// without a housing (§3.9).
+#[inline(always)]
+fn journal(housing: &Option<Housing>, y: &[f64]) -> ([f64; 2], [f64; 2]) {
+    match housing {
+        None => ([y[0], y[1]], [y[2], y[3]]),
+        Some(_) => ([y[0] + y[4], y[1] + y[5]], [y[2] + y[6], y[3] + y[7]]),
+    }
+}
 
 /// The bearing at its location.
 #[derive(Debug, Clone)]
@@ -348,8 +383,8 @@ struct Kinematics {
 }
 
 /// The slider-crank case in minimal coordinates; implements [`OdeSystem`] for the
-/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s) and has no state for
-/// [`Location::Ideal`].
+/// bearing locations (state `(ex, ey, ėx, ėy)` in m and m/s, then a housing's
+/// `(hx, hy, ḣx, ḣy)` when there is one) and has no state for [`Location::Ideal`].
 #[derive(Debug, Clone)]
 pub struct SliderCrank {
     location: Location,
@@ -362,6 +397,9 @@ pub struct SliderCrank {
     isa: Isa,
     /// Whether the energy ledger's quadratures ride along in the state.
     ledger: bool,
+    /// The sprung housing of the outer race (crank_ground only), `None` for the rigid
+    /// ground; its `(hx, hy, ḣx, ḣy)` follow `(ex, ey, ėx, ėy)` in the state.
+    housing: Option<Housing>,
     /// Journal-centre eccentricity at `t = 0` (m); zero but for a study's replicates
     /// (docs/model.md §9.5).
     initial_eccentricity: [f64; 2],
@@ -405,6 +443,9 @@ impl SliderCrank {
             bearing,
             isa: Isa::detect(),
             ledger: false,
+            housing: case
+                .housing
+                .filter(|_| case.location == Location::CrankGround),
             initial_eccentricity: [0.0; 2],
         })
     }
@@ -419,7 +460,8 @@ impl SliderCrank {
     }
 
     /// Turns the energy ledger on or off (docs/model.md §3.8): with it, a bearing
-    /// case's state is `(ex, ey, ėx, ėy, W_driver, ∫∂V/∂t dt, E_dissipated)` and
+    /// case's state is `(ex, ey, ėx, ėy, W_driver, ∫∂V/∂t dt, E_dissipated)` (the
+    /// ledger after the housing's `(hx, hy, ḣx, ḣy)` when there is one) and
     /// the right-hand side also evaluates the driver's power `T θ̇2`, the bearing's
     /// `∂V/∂t` at fixed `e` and its dissipation, for the forces it applies (under a
     /// held regime, the regime's). The ideal mechanism has no state and no ledger.
@@ -434,25 +476,74 @@ impl SliderCrank {
         if !self.ledger {
             return Ledger::default();
         }
+        let at = self.ledger_index();
         Ledger {
-            driver_work: y[4],
-            explicit_potential_work: y[5],
-            dissipated: y[6],
+            driver_work: y[at],
+            explicit_potential_work: y[at + 1],
+            dissipated: y[at + 2],
         }
     }
 
-    /// Kinetic and potential energy at time `t` (s) and state `y` (§3.8); the
-    /// potential uses the natural law (a ball is loaded when `δ > 0`).
+    /// Where the ledger's quadratures start in the state: after `(ex, ey, ėx, ėy)`
+    /// and the housing's `(hx, hy, ḣx, ḣy)` when there is one.
+    fn ledger_index(&self) -> usize {
+        4 + self.housing.map_or(0, |_| HOUSING_LEN)
+    }
+
+    /// Writes the rates of `(ex, ey, ėx, ėy)` and, with a housing, of
+    /// `(hx, hy, ḣx, ḣy)` into `dydt` for the journal's acceleration `pdd` (m/s²)
+    /// under bearing force `f` (N): `ë = p̈` without a housing, else `p̈ − ḧ` (§3.9).
+    /// Returns how many rates it wrote.
+    #[inline(always)]
+    fn mechanism_rates(&self, y: &[f64], pdd: [f64; 2], f: [f64; 2], dydt: &mut [f64]) -> usize {
+        match &self.housing {
+            None => {
+                dydt[..4].copy_from_slice(&[y[2], y[3], pdd[0], pdd[1]]);
+                4
+            }
+            Some(h) => {
+                let hdd = housing_acceleration(h, f, [y[4], y[5]], [y[6], y[7]]);
+                dydt[..4 + HOUSING_LEN].copy_from_slice(&[
+                    y[2],
+                    y[3],
+                    pdd[0] - hdd[0],
+                    pdd[1] - hdd[1],
+                    y[6],
+                    y[7],
+                    hdd[0],
+                    hdd[1],
+                ]);
+                4 + HOUSING_LEN
+            }
+        }
+    }
+
+    /// Kinetic and potential energy at time `t` (s) and state `y` (§3.8, with the
+    /// housing's of §3.9); the potential uses the natural law (a ball is loaded when
+    /// `δ > 0`).
     pub fn energy(&mut self, t: f64, y: &[f64]) -> Result<Energy, ModelError> {
         let k = &self.k;
         let motion = self.drive.motion(t);
         let crank = motion.angle;
-        let (e, ed) = match self.bearing {
-            Some(_) => ([y[0], y[1]], [y[2], y[3]]),
-            None => ([0.0; 2], [0.0; 2]),
+        let (e, ed, p, pd) = match self.bearing {
+            Some(_) => {
+                let (p, pd) = journal(&self.housing, y);
+                ([y[0], y[1]], [y[2], y[3]], p, pd)
+            }
+            None => ([0.0; 2], [0.0; 2], [0.0; 2], [0.0; 2]),
         };
-        let kin = k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
-        let (kinetic, gravity) = k.body_energies(&kin, motion.rate, e, ed);
+        let kin = k.kinematics::<true>(crank.sin_cos(), &motion, p, pd)?;
+        let (mut kinetic, gravity) = k.body_energies(&kin, motion.rate, p, pd);
+        // The housing's displacement is measured from its rest position, where the
+        // springs carry its weight: gravity's work on it and the springs' preload's
+        // cancel (§3.9).
+        let spring = match &self.housing {
+            Some(h) => {
+                kinetic += 0.5 * h.mass * (y[6] * y[6] + y[7] * y[7]);
+                0.5 * h.stiffness * (y[4] * y[4] + y[5] * y[5])
+            }
+            None => 0.0,
+        };
         let contact_potential = match &self.bearing {
             Some(w) => {
                 let state = self.contact_state(crank, &kin, e, ed);
@@ -466,7 +557,7 @@ impl SliderCrank {
         };
         Ok(Energy {
             kinetic,
-            potential: gravity + contact_potential,
+            potential: gravity + spring + contact_potential,
             contact_potential,
         })
     }
@@ -477,7 +568,8 @@ impl SliderCrank {
         let motion = self.drive.motion(t);
         let crank = motion.angle;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
-        let kin = self.k.kinematics::<true>(crank.sin_cos(), &motion, e, ed)?;
+        let (p, pd) = journal(&self.housing, y);
+        let kin = self.k.kinematics::<true>(crank.sin_cos(), &motion, p, pd)?;
         Ok((self.contact_state(crank, &kin, e, ed), crank))
     }
 
@@ -501,19 +593,20 @@ impl SliderCrank {
     }
 
     /// The ledger's rates at `y` after [`SliderCrank::solve`] gave `motion`, `kin`
-    /// and `edd`: the driver's power `T θ̇2` (W), the bearing's `∂V/∂t` at fixed `e`
-    /// (W) and its dissipation (W), for the ball forces the right-hand side applied
-    /// (the held regime's when `held`), ball by ball from the kernel's scalar twin.
+    /// and the journal's `pdd`: the driver's power `T θ̇2` (W), the bearing's
+    /// `∂V/∂t` at fixed `e` (W) and its dissipation with the housing's `c_h |ḣ|²`
+    /// (W), for the ball forces the right-hand side applied (the held regime's when
+    /// `held`), ball by ball from the kernel's scalar twin.
     fn ledger_rates<const VARYING: bool>(
         &self,
         motion: &CrankMotion,
         y: &[f64],
         kin: &Kinematics,
-        edd: [f64; 2],
+        pdd: [f64; 2],
         held: bool,
     ) -> [f64; 3] {
         let k = &self.k;
-        let torque = k.driver_torque::<VARYING>(kin, &k.accelerations(kin, edd), motion.accel);
+        let torque = k.driver_torque::<VARYING>(kin, &k.accelerations(kin, pdd), motion.accel);
         let omega = motion.rate;
         let Some(w) = self.bearing.as_ref() else {
             return [torque * omega, 0.0, 0.0];
@@ -533,7 +626,10 @@ impl SliderCrank {
         let cage_rate = w.weights.journal * journal_rate + w.weights.housing * housing_rate;
         let (psi_in_rate, psi_out_rate) = (cage_rate - journal_rate, cage_rate - housing_rate);
         let regime = held.then_some(&w.regime);
-        let (mut rate, mut dissipation) = (0.0, 0.0);
+        let mut dissipation = self
+            .housing
+            .map_or(0.0, |h| h.damping * (y[6] * y[6] + y[7] * y[7]));
+        let mut rate = 0.0;
         for r in 0..w.balls.len() {
             let b = w.balls.ball_in(r, &state, regime);
             let n = b.normal;
@@ -589,9 +685,10 @@ impl SliderCrank {
         }
     }
 
-    /// Crank motion, kinematics, bearing force and `ë` at `(t, y)`, with the balls
-    /// loaded as the held regime says if `held` (else by the sign of `δ`); no force
-    /// and `ë = 0` for the ideal mechanism. Runs on lanes `V`, with the crank's
+    /// Crank motion, kinematics, bearing force and the journal's acceleration `p̈`
+    /// (`ë` without a housing, §3.9) at `(t, y)`, with the balls loaded as the held
+    /// regime says if `held` (else by the sign of `δ`); no force and `p̈ = 0` for the
+    /// ideal mechanism. Runs on lanes `V`, with the crank's
     /// acceleration terms when `VARYING`; inlined into each instruction set's
     /// version of its callers.
     #[inline(always)]
@@ -616,17 +713,18 @@ impl SliderCrank {
             unreachable!("a bearing case has 4 state variables")
         };
         let (e, ed) = ([ex, ey], [vx, vy]);
+        let (p, pd) = journal(&self.housing, y);
         let regime = held.then_some(&w.regime);
         let (kin, sum) = match self.location {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
             Location::CrankGround => {
                 let state = w.weights.contact_state(e, ed, crank, 0.0);
                 let (sum, trig) = w.balls.evaluate::<V>(&state, regime, Some(crank));
-                (k.kinematics::<VARYING>(trig, &motion, e, ed)?, sum)
+                (k.kinematics::<VARYING>(trig, &motion, p, pd)?, sum)
             }
             // The journal turns with the rod, whose angle needs the crank's first.
             _ => {
-                let kin = k.kinematics::<VARYING>(crank.sin_cos(), &motion, e, ed)?;
+                let kin = k.kinematics::<VARYING>(crank.sin_cos(), &motion, p, pd)?;
                 let (journal, housing) = race_turns(self.location, crank, &kin);
                 let state = w.weights.contact_state(e, ed, journal, housing);
                 (kin, w.balls.evaluate::<V>(&state, regime, None).0)
@@ -659,9 +757,9 @@ impl SliderCrank {
         t: f64,
         y: &[f64],
     ) -> Result<Sample, ModelError> {
-        let (motion, kin, sum, edd) = self.solve::<V, VARYING>(t, y, false)?;
+        let (motion, kin, sum, pdd) = self.solve::<V, VARYING>(t, y, false)?;
         let k = self.k;
-        let acc = k.accelerations(&kin, edd);
+        let acc = k.accelerations(&kin, pdd);
         let crank_moment = k.driver_torque::<VARYING>(&kin, &acc, motion.accel);
         let Accelerations {
             theta_dd,
@@ -702,6 +800,10 @@ impl SliderCrank {
                 [0.0; 2]
             },
             loaded_balls: sum.loaded,
+            housing_acceleration: match &self.housing {
+                Some(h) => housing_acceleration(h, f, [y[4], y[5]], [y[6], y[7]]),
+                None => [f64::NAN; 2],
+            },
         })
     }
 }
@@ -710,8 +812,8 @@ impl OdeSystem for SliderCrank {
     fn dim(&self) -> usize {
         match (self.bearing.is_some(), self.ledger) {
             (false, _) => 0,
-            (true, false) => 4,
-            (true, true) => 4 + LEDGER_LEN,
+            (true, false) => self.ledger_index(),
+            (true, true) => self.ledger_index() + LEDGER_LEN,
         }
     }
 
@@ -722,7 +824,7 @@ impl OdeSystem for SliderCrank {
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
         let (isa, varies) = (self.isa, self.drive.varies());
         if self.ledger {
-            let (edd, rates) = if varies {
+            let (pdd, f, rates) = if varies {
                 dispatch(
                     isa,
                     LedgerTask::<true> {
@@ -743,11 +845,11 @@ impl OdeSystem for SliderCrank {
                     },
                 )
             }?;
-            dydt[..4].copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
-            dydt[4..4 + LEDGER_LEN].copy_from_slice(&rates);
+            let at = self.mechanism_rates(y, pdd, f, dydt);
+            dydt[at..at + LEDGER_LEN].copy_from_slice(&rates);
             return Ok(());
         }
-        let edd = if varies {
+        let (pdd, f) = if varies {
             dispatch(
                 isa,
                 RhsTask::<true> {
@@ -768,7 +870,7 @@ impl OdeSystem for SliderCrank {
                 },
             )
         }?;
-        dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+        self.mechanism_rates(y, pdd, f, dydt);
         Ok(())
     }
 
@@ -812,8 +914,9 @@ impl OdeSystem for SliderCrank {
     }
 }
 
-/// `ë` (m/s²) of [`OdeSystem::rhs`] as a [`LaneTask`], with the crank's
-/// acceleration terms when `VARYING`.
+/// The journal's `p̈` (m/s², [`SliderCrank::solve`]) and the bearing force (N) of
+/// [`OdeSystem::rhs`] as a [`LaneTask`], with the crank's acceleration terms when
+/// `VARYING`.
 struct RhsTask<'a, const VARYING: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
@@ -822,16 +925,18 @@ struct RhsTask<'a, const VARYING: bool> {
 }
 
 impl<const VARYING: bool> LaneTask for RhsTask<'_, VARYING> {
-    type Output = Result<[f64; 2], ModelError>;
+    type Output = Result<([f64; 2], [f64; 2]), ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        Ok(self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?.3)
+        let (_, _, sum, pdd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
+        Ok((pdd, sum.force))
     }
 }
 
-/// `ë` (m/s²) and the ledger's rates of [`OdeSystem::rhs`] with the ledger on, as a
-/// [`LaneTask`], with the crank's acceleration terms when `VARYING`.
+/// The journal's `p̈` (m/s²), the bearing force (N) and the ledger's rates of
+/// [`OdeSystem::rhs`] with the ledger on, as a [`LaneTask`], with the crank's
+/// acceleration terms when `VARYING`.
 struct LedgerTask<'a, const VARYING: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
@@ -840,15 +945,15 @@ struct LedgerTask<'a, const VARYING: bool> {
 }
 
 impl<const VARYING: bool> LaneTask for LedgerTask<'_, VARYING> {
-    type Output = Result<([f64; 2], [f64; LEDGER_LEN]), ModelError>;
+    type Output = Result<([f64; 2], [f64; 2], [f64; LEDGER_LEN]), ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        let (motion, kin, _, edd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
+        let (motion, kin, sum, pdd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
         let rates = self
             .sys
-            .ledger_rates::<VARYING>(&motion, self.y, &kin, edd, self.held);
-        Ok((edd, rates))
+            .ledger_rates::<VARYING>(&motion, self.y, &kin, pdd, self.held);
+        Ok((pdd, sum.force, rates))
     }
 }
 
@@ -878,5 +983,66 @@ fn race_turns(location: Location, crank: f64, kin: &Kinematics) -> (f64, f64) {
     match location {
         Location::CrankRod => (kin.s.asin(), crank),
         _ => (crank, 0.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The housing's two-way coupling against the whole system's x momentum (the
+    /// driver's torque and the slider guide's normal force have no x component, the
+    /// bearing force is internal): at a state with the journal off centre, moving,
+    /// and the housing displaced and moving, the right-hand side's accelerations
+    /// satisfy `m2 ẍ2 + m3 ẍ3 + m4 ẍ4 + m_h ḧ_x = −k_h h_x − c_h ḣ_x` to 1e-12 of
+    /// the bearing force, with the bodies' accelerations from `p̈ = ë + ḧ`; and the
+    /// housing's own `m_h ḧ = F − k_h h − c_h ḣ` holds for the bearing force the
+    /// outputs report, also to 1e-12 of it.
+    #[test]
+    fn the_housing_and_the_mechanism_balance_the_ground_force() {
+        let housing = Housing {
+            mass: 0.7,
+            stiffness: 4e7,
+            damping: 90.0,
+        };
+        let case = CaseParams {
+            rpm: 900.0,
+            housing: Some(housing),
+            ..CaseParams::default()
+        };
+        let mut mech = SliderCrank::new(&case).unwrap();
+        let y = [25e-6, -12e-6, 3e-3, -5e-3, 2e-6, -1e-6, 4e-3, 1e-3];
+        assert_eq!(mech.dim(), y.len());
+        let t = 0.013;
+        let mut dydt = [0.0; 8];
+        mech.rhs(t, &y, &mut dydt).unwrap();
+        let hdd = [dydt[6], dydt[7]];
+        let pdd = [dydt[2] + hdd[0], dydt[3] + hdd[1]];
+        assert_eq!([dydt[4], dydt[5]], [y[6], y[7]]);
+
+        let f = mech.sample(t, &y).unwrap().crank_ground_force;
+        assert!(f[0].abs() + f[1].abs() > 100.0, "no contact: {f:?}");
+        let scale = f[0].hypot(f[1]);
+        for axis in 0..2 {
+            let rest = f[axis] - housing.stiffness * y[4 + axis] - housing.damping * y[6 + axis];
+            assert!((housing.mass * hdd[axis] - rest).abs() < 1e-12 * scale);
+        }
+
+        let k = mech.k;
+        let motion = mech.drive.motion(t);
+        let (p, pd) = journal(&mech.housing, &y);
+        let kin = k
+            .kinematics::<true>(motion.angle.sin_cos(), &motion, p, pd)
+            .unwrap();
+        let acc = k.accelerations(&kin, pdd);
+        let momentum = k.m2 * acc.crank_dd[0]
+            + k.m3 * acc.rod_dd[0]
+            + k.m4 * acc.slider_dd
+            + housing.mass * hdd[0];
+        let ground = -housing.stiffness * y[4] - housing.damping * y[6];
+        assert!(
+            (momentum - ground).abs() < 1e-12 * scale,
+            "{momentum:e} against {ground:e} N"
+        );
     }
 }

@@ -9,7 +9,6 @@ use crate::signal::revolutions::revolution_metric_specs;
 use crate::signal::spectrum::frequencies;
 use crate::signal::{envelope_spectrum_specs, metric_specs, order_spectrum_specs};
 use crate::simulate::CHANNELS;
-use crate::study::params::PARAMETERS;
 use crate::study::Shard;
 use crate::study::Study;
 
@@ -63,8 +62,9 @@ fn profile_name(p: &CaseParams) -> String {
 pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layout {
     let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
     let n_window = study.analysis_window().len();
-    let mut parameters: Vec<Param> = PARAMETERS
-        .iter()
+    let mut parameters: Vec<Param> = study
+        .effects
+        .recorded_parameters()
         .map(|p| Param {
             spec: VarSpec::new(p.name, p.dimension.base_unit(), p.long_name),
             values: ParamValues::F64(cases.iter().map(|c| p.get(&c.params)).collect()),

@@ -42,7 +42,8 @@ pub struct GridFile {
     pub duration: S<Scalar>,
     /// Output samples per second (Hz).
     pub sample_rate: S<Scalar>,
-    /// Effects simulated: any of clearance, waviness, damping, gravity, defects.
+    /// Effects simulated: any of clearance, waviness, damping, gravity, defects,
+    /// housing.
     #[serde(default)]
     pub effects: Option<S<Vec<S<String>>>>,
     /// Body parameter overrides.
@@ -51,6 +52,9 @@ pub struct GridFile {
     /// Bearing parameter overrides.
     #[serde(default)]
     pub bearing: Option<BearingSection>,
+    /// The housing's parameters (with the `housing` effect only).
+    #[serde(default)]
+    pub housing: Option<S<HousingSection>>,
     /// Crank speed when not a grid axis.
     #[serde(default)]
     pub rpm: Option<S<Scalar>>,
@@ -190,6 +194,18 @@ pub struct MechanismSection {
     pub rod_inertia: Option<S<Scalar>>,
     pub slider_mass: Option<S<Scalar>>,
     pub slider_inertia: Option<S<Scalar>>,
+}
+
+/// `housing:` overrides (each optional; docs/model.md §3.9).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HousingSection {
+    /// Mass `m_h` (kg).
+    pub m_h: Option<S<Scalar>>,
+    /// Support stiffness `k_h` in x and y (N/m).
+    pub k_h: Option<S<Scalar>>,
+    /// Support damping `c_h` in x and y (N s/m).
+    pub c_h: Option<S<Scalar>>,
 }
 
 /// `bearing:` overrides (each optional).

@@ -21,7 +21,7 @@ use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{
     DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
 };
-use crate::mechanism::{CaseParams, Location as Site, SpeedProfile};
+use crate::mechanism::{CaseParams, Housing, Location as Site, SpeedProfile};
 use crate::output::study_layout;
 use crate::signal::channel::{AnalysisChannel, Source};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
@@ -45,10 +45,20 @@ pub struct Effects {
     pub gravity: bool,
     /// Localized defects (off: no defects, no defect code in the kernel).
     pub defects: bool,
+    /// The sprung housing at crank_ground (docs/model.md §3.9; off: rigid ground, no
+    /// housing state, no `housing_*` series).
+    pub housing: bool,
 }
 
 impl Effects {
-    const NAMES: [&'static str; 5] = ["clearance", "waviness", "damping", "gravity", "defects"];
+    const NAMES: [&'static str; 6] = [
+        "clearance",
+        "waviness",
+        "damping",
+        "gravity",
+        "defects",
+        "housing",
+    ];
 
     /// The names of the effects that are on.
     pub fn names(&self) -> Vec<&'static str> {
@@ -58,6 +68,7 @@ impl Effects {
             self.damping,
             self.gravity,
             self.defects,
+            self.housing,
         ];
         Self::NAMES
             .iter()
@@ -65,6 +76,23 @@ impl Effects {
             .filter(|(_, o)| *o)
             .map(|(n, _)| *n)
             .collect()
+    }
+
+    /// The indices into [`CHANNELS`] of the channels simulated under these effects:
+    /// those whose effect is `None` or on, in [`CHANNELS`] order.
+    pub fn channels(&self) -> Vec<usize> {
+        let on = self.names();
+        (0..CHANNELS.len())
+            .filter(|&c| CHANNELS[c].effect.is_none_or(|e| on.contains(&e)))
+            .collect()
+    }
+
+    /// The parameters a study file records per case: every one of [`PARAMETERS`]
+    /// but the housing's (`m_h`, `k_h`, `c_h`) while the housing effect is off.
+    pub fn recorded_parameters(&self) -> impl Iterator<Item = &'static ParamDef> + '_ {
+        PARAMETERS
+            .iter()
+            .filter(|p| self.housing || !HOUSING_PARAMETERS.contains(&p.name))
     }
 
     /// The effect a parameter belongs to, if switching that effect off forbids it.
@@ -77,11 +105,16 @@ impl Effects {
             Some(("clearance", self.clearance))
         } else if param.starts_with("defect") {
             Some(("defects", self.defects))
+        } else if HOUSING_PARAMETERS.contains(&param) {
+            Some(("housing", self.housing))
         } else {
             None
         }
     }
 }
+
+/// The parameters of the housing (`housing:`, docs/model.md §3.9).
+const HOUSING_PARAMETERS: [&str; 3] = ["m_h", "k_h", "c_h"];
 
 /// One axis of the expansion: parameter name, its values, and its YAML field.
 type Axis<'a> = (&'a String, &'a S<Vec<S<Scalar>>>, String);
@@ -471,14 +504,15 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
     let sensors = match &file.sensors {
-        Some(list) => sensors::sensors(&ctx, list, &sampling)?,
+        Some(list) => sensors::sensors(&ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
-    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), &sensors)?;
+    let analysed = (&sensors[..], &effects);
+    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
     let envelope = file
         .envelope
         .as_ref()
-        .map(|e| envelope_settings(&ctx, e, &sampling, transient, &sensors))
+        .map(|e| envelope_settings(&ctx, e, &sampling, transient, analysed))
         .transpose()?;
     let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
@@ -1015,7 +1049,7 @@ fn transient_of(
 fn spectra_settings(
     ctx: &Ctx<'_>,
     spectra: Option<&SpectraSection>,
-    sensors: &[Sensor],
+    analysed: (&[Sensor], &Effects),
 ) -> Result<(String, Vec<AnalysisChannel>), StudyError> {
     let default = SpectraSection::default();
     let spectra = spectra.unwrap_or(&default);
@@ -1042,18 +1076,22 @@ fn spectra_settings(
             .value
             .iter()
             .enumerate()
-            .map(|(k, c)| analysis_channel(ctx, c, &format!("spectra.channels[{k}]"), sensors))
+            .map(|(k, c)| analysis_channel(ctx, c, &format!("spectra.channels[{k}]"), analysed))
             .collect::<Result<_, _>>()?,
     };
     Ok((window, channels))
 }
 
-/// The channel of [`CHANNELS`] named by `c` (at `field`).
-fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static str, StudyError> {
-    CHANNELS
+/// The channel of [`CHANNELS`] named by `c` (at `field`), simulated under `effects`.
+fn channel_named(
+    ctx: &Ctx<'_>,
+    c: &S<String>,
+    field: &str,
+    effects: &Effects,
+) -> Result<&'static str, StudyError> {
+    let channel = CHANNELS
         .iter()
         .find(|ch| ch.name == c.value)
-        .map(|ch| ch.name)
         .ok_or_else(|| {
             let names: Vec<&str> = CHANNELS.iter().map(|ch| ch.name).collect();
             ctx.err(
@@ -1065,18 +1103,32 @@ fn channel_named(ctx: &Ctx<'_>, c: &S<String>, field: &str) -> Result<&'static s
                     names.join(", ")
                 ),
             )
-        })
+        })?;
+    match channel.effect {
+        Some(effect) if !effects.names().contains(&effect) => Err(ctx.err(
+            Some(at(&c.referenced)),
+            field,
+            format!(
+                "channel `{}` is simulated with the {effect} effect only, which is off \
+                 (effects: [{}]); add `{effect}` to `effects` to use it",
+                c.value,
+                effects.names().join(", ")
+            ),
+        )),
+        _ => Ok(channel.name),
+    }
 }
 
-/// The series named by `c` (at `field`): a channel of [`CHANNELS`] or a series of
-/// `sensors` (`<name>` or `<name>_clean`).
+/// The series named by `c` (at `field`): a channel of [`CHANNELS`] the study's
+/// `effects` simulate or a series of `sensors` (`<name>` or `<name>_clean`).
 fn analysis_channel(
     ctx: &Ctx<'_>,
     c: &S<String>,
     field: &str,
-    sensors: &[Sensor],
+    (sensors, effects): (&[Sensor], &Effects),
 ) -> Result<AnalysisChannel, StudyError> {
     if let Some(ch) = AnalysisChannel::simulated(&c.value) {
+        channel_named(ctx, c, field, effects)?;
         return Ok(ch);
     }
     for (k, sensor) in sensors.iter().enumerate() {
@@ -1125,7 +1177,7 @@ fn envelope_settings(
     section: &S<EnvelopeSection>,
     sampling: &Sampling,
     transient: f64,
-    sensors: &[Sensor],
+    analysed: (&[Sensor], &Effects),
 ) -> Result<EnvelopeSettings, StudyError> {
     let list = &section.value.channels;
     if list.value.is_empty() {
@@ -1138,7 +1190,7 @@ fn envelope_settings(
     let mut channels: Vec<AnalysisChannel> = Vec::new();
     for (k, c) in list.value.iter().enumerate() {
         let field = format!("envelope.channels[{k}]");
-        let channel = analysis_channel(ctx, c, &field, sensors)?;
+        let channel = analysis_channel(ctx, c, &field, analysed)?;
         if channels.iter().any(|ch| ch.name == channel.name) {
             return Err(ctx.err(
                 Some(at(&c.referenced)),
@@ -1328,6 +1380,7 @@ fn reference_of(p: &CaseParams) -> CaseParams {
     CaseParams {
         location: Site::Ideal,
         bearing: Default::default(),
+        housing: None,
         ..p.clone()
     }
 }
@@ -1345,6 +1398,7 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
         rpm,
         speed,
         gravity,
+        housing: _,
     } = p;
     let crate::mechanism::MechanismParams {
         crank_length,
@@ -1588,6 +1642,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             damping: true,
             gravity: false,
             defects: false,
+            housing: false,
         });
     };
     let mut e = Effects {
@@ -1596,6 +1651,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
         damping: false,
         gravity: false,
         defects: false,
+        housing: false,
     };
     for (k, name) in list.value.iter().enumerate() {
         let slot = match name.value.as_str() {
@@ -1604,6 +1660,7 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
             "damping" => &mut e.damping,
             "gravity" => &mut e.gravity,
             "defects" => &mut e.defects,
+            "housing" => &mut e.housing,
             other => {
                 return Err(ctx.err(
                     Some(at(&name.referenced)),
@@ -1629,6 +1686,9 @@ fn base_case(
     prov: &mut Provenance,
 ) -> Result<CaseParams, StudyError> {
     let mut c = CaseParams::default();
+    if effects.housing {
+        c.housing = Some(Housing::default());
+    }
     if effects.waviness {
         // the paper's Table 2 (docs/model.md §2.8): N_i = N_o = 35, Π_p = 4 µm.
         c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
@@ -1692,6 +1752,26 @@ fn base_case(
         }
         if let Some(list) = &b.defects {
             c.bearing.defects = defects(ctx, list, effects)?;
+        }
+    }
+    if let Some(h) = &file.housing {
+        if !effects.housing {
+            return Err(ctx.err(
+                Some(at(&h.referenced)),
+                "housing",
+                format!(
+                    "the housing effect is off (effects: [{}]); add `housing` to `effects` \
+                     to set it",
+                    effects.names().join(", ")
+                ),
+            ));
+        }
+        for (name, v) in [
+            ("m_h", &h.value.m_h),
+            ("k_h", &h.value.k_h),
+            ("c_h", &h.value.c_h),
+        ] {
+            set(&mut c, name, v, &format!("housing.{name}"), prov)?;
         }
     }
     match (&file.speed, &file.rpm) {

@@ -144,11 +144,10 @@ impl MemoryEstimate {
         let n_f = (shape.window / 2 + 1) as f64;
         let s = shape.spectra as f64;
         let simulated = CHANNELS.len() as f64;
-        let channels = simulated + shape.sensor_series as f64;
         let width = if shape.float32 { 4.0 } else { 8.0 };
         let jobs_f = jobs.max(1) as f64;
-        // The case's series and their times, float64.
-        let series = (channels + 1.0) * n * 8.0;
+        // The case's series (every channel is simulated) and their times, float64.
+        let series = (simulated + shape.sensor_series as f64 + 1.0) * n * 8.0;
         // Spectra, the FFT's window, input, output and scratch, the metrics' temporaries.
         // A sensor's noise draws are held while its noisy series is made.
         let draws = if shape.sensor_series > 0 {
@@ -457,7 +456,7 @@ mod tests {
             replicates: 0,
             revolutions: 0,
             sensor_series: 0,
-            stored_series: CHANNELS.len(),
+            stored_series: CHANNELS.iter().filter(|c| c.effect.is_none()).count(),
             stored_samples: 20_001,
             order_spectra: 0,
         }
@@ -571,6 +570,22 @@ mod tests {
         let per_case = 4.0 * n * 8.0 + n * 8.0 + record;
         assert!((with.per_case - without.per_case - per_case).abs() < 1e-6);
         assert_eq!(with.references, without.references);
+    }
+
+    /// The housing's two channels, simulated in every case's series either way, are
+    /// in the record only when the file stores them.
+    #[test]
+    fn stored_channels_count_in_the_record_only() {
+        let plain = million_short_cases();
+        let housing = Shape {
+            stored_series: plain.stored_series + 2,
+            ..plain
+        };
+        let (a, b) = (MemoryEstimate::of(plain, 2), MemoryEstimate::of(housing, 2));
+        let record = 2.0 * 20_001.0 * 8.0 * (1.0 + 1.0 / 64.0);
+        assert!((b.record - a.record - record).abs() < 1e-6);
+        assert_eq!(b.references, a.references);
+        assert!((b.per_case - a.per_case - record).abs() < 1e-6);
     }
 
     #[test]

@@ -240,13 +240,7 @@ impl Study {
     /// The indices into [`CHANNELS`] of the channels the study simulates: those whose
     /// `effect` is `None` or on in the study.
     pub fn simulated_channels(&self) -> Vec<usize> {
-        let on = self.effects.names();
-        CHANNELS
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.effect.is_none_or(|e| on.contains(&e)))
-            .map(|(k, _)| k)
-            .collect()
+        self.effects.channels()
     }
 
     /// The sensor series the file stores, as indices into the list of every

@@ -4,7 +4,7 @@
 
 use super::units::Dimension;
 use crate::bearing::{Defect, Harmonic, RaceWaviness};
-use crate::mechanism::{CaseParams, SpeedProfile};
+use crate::mechanism::{CaseParams, Housing, SpeedProfile};
 
 /// One scalar case parameter.
 #[derive(Clone, Copy)]
@@ -112,6 +112,17 @@ fn sine_mut(c: &mut CaseParams) -> Option<(&mut f64, &mut f64, &mut f64)> {
     }
 }
 
+/// A field of the case's housing, NaN without one.
+fn housing_value(c: &CaseParams, f: fn(&Housing) -> f64) -> f64 {
+    c.housing.as_ref().map_or(f64::NAN, f)
+}
+
+/// The case's housing, created with [`Housing::default`] if absent (the study
+/// refuses a housing axis while the effect is off).
+fn housing_mut(c: &mut CaseParams) -> &mut Housing {
+    c.housing.get_or_insert_with(Housing::default)
+}
+
 /// A field of the case's first defect; without one, of [`Defect::default`] (zero
 /// depth: what a `defect_*` axis would create, and no defect either way).
 fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
@@ -138,6 +149,7 @@ macro_rules! param {
 /// are NaN for any other speed.
 /// `defect_*` act on the first defect (created, of zero depth, if absent); in files
 /// they hold its values (those of that zero-depth defect without defects).
+/// `m_h`, `k_h` and `c_h` are the housing's, NaN in files for a case without one.
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
@@ -384,6 +396,33 @@ pub const PARAMETERS: &[ParamDef] = &[
         "depth of the first defect",
         |c| first_defect_value(c, |d| d.depth),
         |c, v| Defect::first(&mut c.bearing.defects).depth = v
+    ),
+    param!(
+        "m_h",
+        "housing.m_h",
+        Mass,
+        false,
+        "housing mass m_h",
+        |c| housing_value(c, |h| h.mass),
+        |c, v| housing_mut(c).mass = v
+    ),
+    param!(
+        "k_h",
+        "housing.k_h",
+        SpringStiffness,
+        false,
+        "housing support stiffness k_h (x and y)",
+        |c| housing_value(c, |h| h.stiffness),
+        |c, v| housing_mut(c).stiffness = v
+    ),
+    param!(
+        "c_h",
+        "housing.c_h",
+        Damping,
+        false,
+        "housing support damping c_h (x and y)",
+        |c| housing_value(c, |h| h.damping),
+        |c, v| housing_mut(c).damping = v
     ),
     param!(
         "inner_race_diameter",

@@ -20,6 +20,8 @@ pub enum Dimension {
     Speed,
     /// Hertz contact stiffness, SI unit N/m^(3/2) (N m^-1.5).
     Stiffness,
+    /// Linear spring stiffness, SI unit N/m.
+    SpringStiffness,
     /// Viscous damping, SI unit N s/m.
     Damping,
     /// A rate per unit speed (the Hunt–Crossley `α`), SI unit s/m.
@@ -73,6 +75,13 @@ impl Dimension {
                 ("N m-1.5", P(0)),
                 ("N/m^1.5", P(0)),
                 ("N m^-1.5", P(0)),
+            ],
+            Dimension::SpringStiffness => &[
+                ("N m-1", P(0)),
+                ("N/m", P(0)),
+                ("kN/m", P(3)),
+                ("MN/m", P(6)),
+                ("N/mm", P(3)),
             ],
             Dimension::Damping => &[
                 ("N s m-1", P(0)),
@@ -179,6 +188,9 @@ mod tests {
         assert_eq!(Stiffness.parse("9.57e9 N m-1.5").unwrap(), 9.57e9);
         assert_eq!(Stiffness.base_unit(), "N/m^(3/2)");
         assert_eq!(Time.parse("20 us").unwrap(), 20e-6);
+        assert_eq!(SpringStiffness.parse("1e8 N/m").unwrap(), 1e8);
+        assert_eq!(SpringStiffness.parse("100 MN/m").unwrap(), 1e8);
+        assert!(SpringStiffness.parse("1e8 N/m^1.5").is_err());
         assert_eq!(Frequency.parse("50 kHz").unwrap(), 50e3);
         assert_eq!(Length.parse("1e-3").unwrap(), 1e-3);
     }

@@ -21,6 +21,7 @@ QUANTITIES = {
     # Hertz contact stiffness K in F = K delta^(3/2): kg m^(-1/2) s^-2, a half-integer
     # power of length, which no UDUNITS string can express
     "stiffness": (None, "N/m**1.5", 1.0),
+    "spring_stiffness": ("kg s-2", "N/m", 1.0),
     "damping": ("kg s-1", "kg/s", 1.0),
     "mass": ("kg", "kg", 1.0),
     "inertia": ("kg m2", "kg*m**2", 1.0),
@@ -48,12 +49,13 @@ _BY_QUANTITY = {
     "angle": ["waviness_phase", "inner_waviness_phase", "outer_waviness_phase", "defect_angle"],
     "crank_speed": ["rpm", "speed_from", "speed_to", "speed_mean", "speed_amplitude"],
     "stiffness": ["stiffness"],
-    "damping": ["damping"],
-    "mass": ["crank_mass", "rod_mass", "slider_mass"],
+    "spring_stiffness": ["k_h"],
+    "damping": ["damping", "c_h"],
+    "mass": ["crank_mass", "rod_mass", "slider_mass", "m_h"],
     "inertia": ["crank_inertia", "rod_inertia", "slider_inertia"],
     "time": ["time", "wall_time", "stiffness_switch_time", "speed_over"],
     "frequency": ["frequency", "speed_frequency"],
-    "acceleration": ["slider_acceleration"],
+    "acceleration": ["slider_acceleration", "housing_acceleration_x", "housing_acceleration_y"],
     "moment": ["crank_moment"],
     "force": [
         "bearing_force", "bearing_force_x", "bearing_force_y", "crank_ground_force_x",

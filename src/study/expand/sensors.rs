@@ -3,7 +3,7 @@
 
 use std::collections::HashSet;
 
-use super::{at, channel_named, Ctx};
+use super::{at, channel_named, Ctx, Effects};
 use crate::signal::sensor::{Noise, Sensor, Transducer, CLEAN_SUFFIX};
 use crate::simulate::Sampling;
 use crate::study::config::{SensorSection, S};
@@ -53,6 +53,7 @@ pub(super) fn sensors(
     ctx: &Ctx<'_>,
     list: &S<Vec<S<SensorSection>>>,
     sampling: &Sampling,
+    effects: &Effects,
 ) -> Result<Vec<Sensor>, StudyError> {
     let nyquist = 0.5 * sampling.sample_rate;
     let mut sensors: Vec<Sensor> = Vec::with_capacity(list.value.len());
@@ -73,7 +74,7 @@ pub(super) fn sensors(
                 ),
             ));
         }
-        let channel = channel_named(ctx, &s.channel, &field("channel"))?;
+        let channel = channel_named(ctx, &s.channel, &field("channel"), effects)?;
         let f_n = ctx.quantity(
             &s.natural_frequency,
             Dimension::Frequency,
