@@ -168,8 +168,9 @@ def fault_cases(ds, rpm):
 def test_each_fault_line_stands_in_its_envelope_spectrum(diagnosis, rpm):
     """In the stored envelope spectrum of the bearing force (the kurtogram's band), each
     defect's line (outer BPFO, inner BPFI, ball 2·BSF; largest within ±1 bin) is the largest
-    of the three lines, at least 5 times the spectrum's median below 3× the line, and a
-    million times the healthy bearing's there; its band energy is the largest of the three."""
+    of the three lines, at least 5 times the spectrum's median below 3× the line (measured
+    12–116), and a million times the healthy bearing's there; its band energy is the largest
+    of the three."""
     freq = diagnosis["frequency"].values
     spectra = diagnosis["bearing_force_envelope_spectrum"].values
     cases = fault_cases(diagnosis, rpm)
