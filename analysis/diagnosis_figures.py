@@ -94,11 +94,19 @@ def _line_frequencies(ds, case):
     return {k: order * f_shaft for k, order in diagnosis.fault_orders(ds, case).lines().items()}, f_shaft
 
 
+def squared_unit_text(ds, channel):
+    """The display unit of the square of `channel`, e.g. 'N²' or '(m/s²)²'."""
+    units = unit_text(ds, channel)
+    return f"({units})²" if any(c in units for c in " /²") else f"{units}²"
+
+
 def case_envelope(ds, channel, case):
     """(frequencies in Hz, envelope amplitudes, (low, high) band in Hz, stored?) of one
-    case: the file's `<channel>_envelope_spectrum` and band where it has them, else the
+    case: the file's `<channel>_envelope_spectrum` and band where it has them (a
+    simulated channel or a sensor's series the study's `envelope:` lists), else the
     envelope spectrum (docs/model.md §7.4) of the stored series `channel` in the band
-    of its fast kurtogram (§7.6), both recomputed here, e.g. for a sensor's series."""
+    of its fast kurtogram (§7.6), both recomputed here, e.g. for a sensor's series
+    `envelope:` does not list."""
     name = f"{channel}_envelope_spectrum"
     if name in ds:
         band = tuple(float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
@@ -145,7 +153,7 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
         ax.set_xlim(0, top)
         ax.set_ylim(0, 1.6 * np.nanmax(spectrum[band]))  # room for the legend above the lines
         ax.set_xlabel("frequency (Hz)")
-        ax.set_ylabel(f"envelope amplitude ({unit_text(ds, channel)}²)")
+        ax.set_ylabel(f"envelope amplitude ({squared_unit_text(ds, channel)})")
         ax.grid(alpha=0.3, lw=0.4)
         ax.legend(fontsize=6, loc="upper right", ncol=2)
     fig.suptitle(f"Envelope spectra of {channel}", fontsize=11)

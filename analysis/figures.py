@@ -41,7 +41,8 @@ CHANNEL_TEXT = {
     "crank_moment": "crank moment",
     "bearing_force": "bearing force |F|",
 }
-UNIT_TEXT = {"m s-2": "m/s²", "N/m^(3/2)": "N/m^1.5", "N m-1.5": "N/m^1.5", "N s m-1": "N s/m", "kg m2": "kg m²", "1": ""}
+UNIT_TEXT = {"m s-2": "m/s²", "m2 s-4": "(m/s²)²", "m4 s-8": "(m/s²)⁴", "N2": "N²", "N4": "N⁴",
+             "N/m^(3/2)": "N/m^1.5", "N m-1.5": "N/m^1.5", "N s m-1": "N s/m", "kg m2": "kg m²", "1": ""}
 PARAMETER_TEXT = {"ball_count": "N_b", "location": "bearing", "waviness_amplitude": "waviness", "rpm": "speed"}
 
 

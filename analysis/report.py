@@ -281,23 +281,21 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
 
     if not channels:
         index.note("The study has no `envelope:`: no envelope spectra, waterfall, kurtogram band or indicators.")
-    for channel in channels:
+    sensors = sensor_series(ds)
+    for channel in channels + [s for s in sensors if s not in channels]:
+        stored = channel in channels
+        what = f"the sensor series {channel} (noise included)" if channel in sensors else channel
+        band = ("in the band the file records" if stored
+                else "each in the band of its fast kurtogram recomputed from the series")
         for name in constant:
             out = outdir / f"envelope_{channel}_{slug_text(name)}.png"
             _draw(index, f"envelope spectra of {channel}, {name}",
                   lambda: dfig.envelope_spectra(ds, channel, groups[name], out, dpi=dpi),
-                  f"envelope spectra of {channel} at {name}, one panel per fault label (healthy grey); dashed: "
-                  "FTF, BPFO, BPFI, BSF, 2·BSF; dotted: shaft sidebands ±k·f_shaft around the panel's fault line.")
-        if not constant:
+                  f"envelope spectra of {what} at {name}, {band}, one panel per fault label (healthy grey); "
+                  "dashed: FTF, BPFO, BPFI, BSF, 2·BSF; dotted: shaft sidebands ±k·f_shaft around the panel's "
+                  "fault line.")
+        if stored and not constant:
             index.note(f"{channel}: no constant-speed condition, no envelope spectra with fault lines.")
-    for sensor in sensor_series(ds):
-        for name in constant:
-            out = outdir / f"envelope_{sensor}_{slug_text(name)}.png"
-            _draw(index, f"envelope spectra of {sensor}, {name}",
-                  lambda: dfig.envelope_spectra(ds, sensor, groups[name], out, dpi=dpi),
-                  f"envelope spectra of the sensor series {sensor} (noise included) at {name}, each in the band "
-                  "of its fast kurtogram recomputed from the series, one panel per fault label; lines and "
-                  "sidebands marked as above.")
 
     shown = varying or constant[:1]
     for name in shown:

@@ -32,22 +32,24 @@ def test_the_fault_lines_are_the_stored_frequencies(diagnosis):
         assert np.isnan(diagnosis["bpfo"].values[k])
 
 
-def test_envelope_and_kurtogram_recomputed_from_the_series(diagnosis):
-    """docs/model.md §7.4 and §7.6 from the stored series: the kurtogram's band exactly, its
-    kurtosis to 1e-9, the envelope spectrum to 1e-9 of its largest value (the healthy
-    bearing's chosen band holds only rounding, 1e-13 N² against a variance of 100s of N²:
-    there both stay below 1e-12 of the variance)."""
+@pytest.mark.parametrize("channel", ["bearing_force", "accelerometer"])
+def test_envelope_and_kurtogram_recomputed_from_the_series(diagnosis, channel):
+    """docs/model.md §7.4 and §7.6 from the stored series (the simulated bearing force and the
+    housing accelerometer's noisy series): the kurtogram's band exactly, its kurtosis to
+    1e-9, the envelope spectrum to 1e-9 of its largest value (the healthy bearing force's
+    chosen band holds only rounding, 1e-13 N² against a variance of 100s of N²: there both
+    stay below 1e-12 of the variance)."""
     fs = float(diagnosis.attrs["sample_rate"])
     for k in range(diagnosis.sizes["case"]):
-        _, x = dg.window_series(diagnosis, "bearing_force", k)
+        _, x = dg.window_series(diagnosis, channel, k)
         result = dg.kurtogram(x, fs)
-        low = float(diagnosis["bearing_force_envelope_band_low"].values[k])
-        high = float(diagnosis["bearing_force_envelope_band_high"].values[k])
+        low = float(diagnosis[f"{channel}_envelope_band_low"].values[k])
+        high = float(diagnosis[f"{channel}_envelope_band_high"].values[k])
         assert result.band == (low, high)
-        stored_kurtosis = float(diagnosis["bearing_force_envelope_band_kurtosis"].values[k])
+        stored_kurtosis = float(diagnosis[f"{channel}_envelope_band_kurtosis"].values[k])
         assert result.kurtosis == pytest.approx(stored_kurtosis, rel=RTOL)
         _, spectrum = dg.envelope_spectrum(x, fs, low, high)
-        stored = diagnosis["bearing_force_envelope_spectrum"].values[k]
+        stored = diagnosis[f"{channel}_envelope_spectrum"].values[k]
         roundoff = 1e-12 * np.var(x)  # a band holding only the FFTs' rounding of the series
         if stored.max() < roundoff:
             assert spectrum.max() < roundoff

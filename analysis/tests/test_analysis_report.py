@@ -107,13 +107,15 @@ DIAGNOSIS_FIGURES = [
     "orbit_0.png",
     "envelope_bearing_force_600rpm.png",
     "envelope_bearing_force_900rpm.png",
-    "envelope_force_sensor_600rpm.png",
-    "envelope_force_sensor_900rpm.png",
+    "envelope_accelerometer_600rpm.png",
+    "envelope_accelerometer_900rpm.png",
     "spectrogram_bearing_force_run-up300-900rpm.png",
     "waterfall_bearing_force.png",
+    "waterfall_accelerometer.png",
     "orders_bearing_force_run-up300-900rpm.png",
 ] + [f"kurtogram_bearing_force_600rpm_{fault}.png" for fault in ("outer", "inner", "ball", "none")] + [
-    "indicators_bearing_force.png"
+    "indicators_bearing_force.png",
+    "indicators_accelerometer.png",
 ]
 
 
@@ -146,8 +148,9 @@ def drawn(monkeypatch):
 
 
 def test_the_diagnosis_study_shows_every_figure(diagnosis_report, assert_png):
-    """Orbit, envelope spectra per constant speed, spectrogram, waterfall and order spectra of
-    the run-up, a kurtogram per fault label and the indicator heatmaps; nothing skipped."""
+    """Orbit, envelope spectra of the bearing force and of the housing accelerometer per
+    constant speed, spectrogram and order spectra of the run-up, a waterfall and indicator
+    heatmaps of each envelope channel, a kurtogram per fault label; nothing skipped."""
     outdir, index = diagnosis_report
     check_index(outdir, assert_png)
     section = diagnosis_section(index)
@@ -165,8 +168,9 @@ def fault_cases(ds, rpm):
 def test_each_fault_line_stands_in_its_envelope_spectrum(diagnosis, rpm):
     """In the stored envelope spectrum of the bearing force (the kurtogram's band), each
     defect's line (outer BPFO, inner BPFI, ball 2·BSF; largest within ±1 bin) is the largest
-    of the three lines, at least 5 times the spectrum's median below 3× the line, and a
-    million times the healthy bearing's there; its band energy is the largest of the three."""
+    of the three lines, at least 5 times the spectrum's median below 3× the line (measured
+    12–116), and a million times the healthy bearing's there; its band energy is the largest
+    of the three."""
     freq = diagnosis["frequency"].values
     spectra = diagnosis["bearing_force_envelope_spectrum"].values
     cases = fault_cases(diagnosis, rpm)
@@ -192,14 +196,20 @@ def test_each_fault_line_stands_in_its_envelope_spectrum(diagnosis, rpm):
 
 @pytest.mark.parametrize("rpm", [600.0, 900.0])
 def test_each_fault_line_stands_in_the_noisy_sensor_s_envelope(diagnosis, rpm):
-    """The sensor (3 kHz, ζ = 0.05, 10 dB SNR on bearing_force_y), demodulated in the band of
-    its own recomputed kurtogram: each defect's line is the largest of BPFO, BPFI and 2·BSF
-    and at least 4 times the spectrum's median below 3× the line (measured 5.7–67)."""
+    """The accelerometer (3 kHz, ζ = 0.05, 10 dB SNR on housing_acceleration_y): in its stored
+    envelope spectrum, in the band the file records for the case (the sensor's resonance,
+    below 5 kHz), each defect's line is the largest of BPFO, BPFI and 2·BSF and at least 4
+    times the spectrum's median below 3× the line (measured 41, 40, 17 at 600 rpm and 66,
+    58, 13 at 900 rpm: outer, inner, ball)."""
     cases = fault_cases(diagnosis, rpm)
     for fault, own in dg.FAULT_LINE.items():
         case = cases[fault]
-        freq, spectrum, (low, high), stored = dfig.case_envelope(diagnosis, "force_sensor", case)
-        assert not stored and high <= 5000, (low, high)  # the sensor's resonance, not the 5–10 kHz of the force
+        freq, spectrum, (low, high), stored = dfig.case_envelope(diagnosis, "accelerometer", case)
+        assert stored
+        np.testing.assert_array_equal(spectrum, diagnosis["accelerometer_envelope_spectrum"].values[case])
+        assert (low, high) == tuple(float(diagnosis[f"accelerometer_envelope_band_{e}"].values[case])
+                                    for e in ("low", "high"))
+        assert high <= 5000, (low, high)  # the sensor's resonance, not the 5–10 kHz of the force
         lines = {name: order * rpm / 60 for name, order in dg.fault_orders(diagnosis, case).lines().items()}
 
         def at(f):
@@ -213,7 +223,8 @@ def test_each_fault_line_stands_in_the_noisy_sensor_s_envelope(diagnosis, rpm):
 
 def test_envelope_figure_marks_the_lines_and_sidebands(diagnosis, drawn, tmp_path):
     """Each panel marks FTF, BPFO, BPFI, BSF, 2·BSF at order × rpm/60 and, around its own
-    fault line, the shaft sidebands ±1 and ±2 × rpm/60."""
+    fault line, the shaft sidebands ±1 and ±2 × rpm/60; the accelerometer's panels show the
+    band the file records in the squared unit of an acceleration."""
     cases = fault_cases(diagnosis, 600.0)
     dfig.envelope_spectra(diagnosis, "bearing_force", cases, tmp_path / "e.png", dpi=50)
     axes = drawn[0].axes
@@ -226,6 +237,11 @@ def test_envelope_figure_marks_the_lines_and_sidebands(diagnosis, drawn, tmp_pat
             want += [lines[dg.FAULT_LINE[fault]] + k * 10 for k in (-2, -1, 1, 2)]
         assert marks == sorted(round(f, 6) for f in want), fault
         assert ax.get_xlabel() == "frequency (Hz)" and ax.get_ylabel() == "envelope amplitude (N²)"
+    dfig.envelope_spectra(diagnosis, "accelerometer", cases, tmp_path / "a.png", dpi=50)
+    for ax, case in zip(drawn[-1].axes, cases.values()):
+        low = float(diagnosis["accelerometer_envelope_band_low"].values[case])
+        assert ax.get_title().split(": ")[1].startswith(f"band {low:g}–"), ax.get_title()
+        assert ax.get_ylabel() == "envelope amplitude ((m/s²)²)"
 
 
 def test_orbit_draws_the_clearance_circle(diagnosis, drawn, tmp_path):
@@ -304,7 +320,7 @@ def test_diagnosis_figures_are_skipped_without_their_data(diagnosis, tmp_path):
     """A study without `envelope:`, sensors and eccentricities: the index says what is not
     shown and why; the spectrogram then shows the raw series of the run-up."""
     names = [n for n in diagnosis.data_vars
-             if "envelope" in n or n.startswith(("eccentricity", "ftf", "bpf", "bsf", "force_sensor"))
+             if "envelope" in n or n.startswith(("eccentricity", "ftf", "bpf", "bsf", "accelerometer"))
              or "spectral_kurtosis" in n
              or n.startswith("bearing_force_") and n.split("bearing_force_")[1] in report.INDICATORS]
     bare = diagnosis.drop_vars(names)
