@@ -689,10 +689,11 @@ impl SliderCrank {
     /// (`ë` without a housing, §3.9) at `(t, y)`, with the balls loaded as the held
     /// regime says if `held` (else by the sign of `δ`); no force and `p̈ = 0` for the
     /// ideal mechanism. Runs on lanes `V`, with the crank's
-    /// acceleration terms when `VARYING`; inlined into each instruction set's
-    /// version of its callers.
+    /// acceleration terms when `VARYING`; with `RIGID` the caller has checked that
+    /// the case has no housing, and the journal is `e` without looking. Inlined into
+    /// each instruction set's version of its callers.
     #[inline(always)]
-    fn solve<V: Lanes, const VARYING: bool>(
+    fn solve<V: Lanes, const VARYING: bool, const RIGID: bool>(
         &mut self,
         t: f64,
         y: &[f64],
@@ -713,7 +714,11 @@ impl SliderCrank {
             unreachable!("a bearing case has 4 state variables")
         };
         let (e, ed) = ([ex, ey], [vx, vy]);
-        let (p, pd) = journal(&self.housing, y);
+        let (p, pd) = if RIGID {
+            (e, ed)
+        } else {
+            journal(&self.housing, y)
+        };
         let regime = held.then_some(&w.regime);
         let (kin, sum) = match self.location {
             // The bearing's angles follow the crank alone: one SIMD sin_cos for all.
@@ -757,7 +762,7 @@ impl SliderCrank {
         t: f64,
         y: &[f64],
     ) -> Result<Sample, ModelError> {
-        let (motion, kin, sum, pdd) = self.solve::<V, VARYING>(t, y, false)?;
+        let (motion, kin, sum, pdd) = self.solve::<V, VARYING, false>(t, y, false)?;
         let k = self.k;
         let acc = k.accelerations(&kin, pdd);
         let crank_moment = k.driver_torque::<VARYING>(&kin, &acc, motion.accel);
@@ -823,6 +828,16 @@ impl OdeSystem for SliderCrank {
         }
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
         let (isa, varies) = (self.isa, self.drive.varies());
+        // The common case first: no ledger, no housing.
+        if !self.ledger && self.housing.is_none() {
+            let (edd, _) = if varies {
+                dispatch(isa, RhsTask::<true, true>::new(self, t, y, held))
+            } else {
+                dispatch(isa, RhsTask::<false, true>::new(self, t, y, held))
+            }?;
+            dydt.copy_from_slice(&[y[2], y[3], edd[0], edd[1]]);
+            return Ok(());
+        }
         if self.ledger {
             let (pdd, f, rates) = if varies {
                 dispatch(
@@ -850,25 +865,9 @@ impl OdeSystem for SliderCrank {
             return Ok(());
         }
         let (pdd, f) = if varies {
-            dispatch(
-                isa,
-                RhsTask::<true> {
-                    sys: self,
-                    t,
-                    y,
-                    held,
-                },
-            )
+            dispatch(isa, RhsTask::<true, false>::new(self, t, y, held))
         } else {
-            dispatch(
-                isa,
-                RhsTask::<false> {
-                    sys: self,
-                    t,
-                    y,
-                    held,
-                },
-            )
+            dispatch(isa, RhsTask::<false, false>::new(self, t, y, held))
         }?;
         self.mechanism_rates(y, pdd, f, dydt);
         Ok(())
@@ -916,20 +915,29 @@ impl OdeSystem for SliderCrank {
 
 /// The journal's `p̈` (m/s², [`SliderCrank::solve`]) and the bearing force (N) of
 /// [`OdeSystem::rhs`] as a [`LaneTask`], with the crank's acceleration terms when
-/// `VARYING`.
-struct RhsTask<'a, const VARYING: bool> {
+/// `VARYING`, for a case without a housing when `RIGID`.
+struct RhsTask<'a, const VARYING: bool, const RIGID: bool> {
     sys: &'a mut SliderCrank,
     t: f64,
     y: &'a [f64],
     held: bool,
 }
 
-impl<const VARYING: bool> LaneTask for RhsTask<'_, VARYING> {
+impl<'a, const VARYING: bool, const RIGID: bool> RhsTask<'a, VARYING, RIGID> {
+    /// The task at `(t, y)` with the regime held when `held`.
+    fn new(sys: &'a mut SliderCrank, t: f64, y: &'a [f64], held: bool) -> Self {
+        Self { sys, t, y, held }
+    }
+}
+
+impl<const VARYING: bool, const RIGID: bool> LaneTask for RhsTask<'_, VARYING, RIGID> {
     type Output = Result<([f64; 2], [f64; 2]), ModelError>;
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        let (_, _, sum, pdd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
+        let (_, _, sum, pdd) = self
+            .sys
+            .solve::<V, VARYING, RIGID>(self.t, self.y, self.held)?;
         Ok((pdd, sum.force))
     }
 }
@@ -949,7 +957,9 @@ impl<const VARYING: bool> LaneTask for LedgerTask<'_, VARYING> {
 
     #[inline(always)]
     fn run<V: Lanes>(self) -> Self::Output {
-        let (motion, kin, sum, pdd) = self.sys.solve::<V, VARYING>(self.t, self.y, self.held)?;
+        let (motion, kin, sum, pdd) = self
+            .sys
+            .solve::<V, VARYING, false>(self.t, self.y, self.held)?;
         let rates = self
             .sys
             .ledger_rates::<VARYING>(&motion, self.y, &kin, pdd, self.held);
