@@ -2,9 +2,9 @@
 //! is bit-identical to the same study with it in everything they share; the grid
 //! key's refusals; the waviness lines in the envelope spectrum of the bearing force.
 
+use crate::common::run_study as run;
 use std::path::Path;
 
-use studyrun::output::StudyReader;
 use studyrun::signal::metric_specs;
 use studyrun::study::Study;
 
@@ -12,17 +12,6 @@ const BASE: &str = "name: env\nduration: 0.1\nsample_rate: 10000\ntransient: \"0
 
 const ENVELOPE: &str =
     "envelope:\n  channels: [bearing_force, crank_moment]\n  band: [\"1 kHz\", \"4 kHz\"]\n";
-
-fn run(dir: &Path, name: &str, text: &str) -> StudyReader {
-    let grid = dir.join(format!("{name}.yaml"));
-    std::fs::write(&grid, text).unwrap();
-    let out = dir.join(format!("{name}.h5"));
-    crate::common::studyrun_ok(
-        dir,
-        &[grid.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"],
-    );
-    StudyReader::open(&out).unwrap()
-}
 
 #[test]
 fn without_envelope_nothing_is_stored_and_the_rest_is_bit_identical() {

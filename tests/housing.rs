@@ -2,6 +2,7 @@
 //! ground as `k_h` grows, the housing's equation recomputed from the integrated
 //! state, the energy balance, the study file's series and the refusals.
 
+use crate::common::run_study as run;
 use std::path::Path;
 
 use studyrun::mechanism::{CaseParams, Housing, Location, SliderCrank};
@@ -189,17 +190,6 @@ const BASE: &str = "name: h\nduration: 0.05\nsample_rate: 20000\nrpm: 600\n\
 /// A study of one case over `BASE` with `extra`.
 fn one_case(extra: &str) -> String {
     format!("{BASE}{extra}cases: [{{}}]\n")
-}
-
-fn run(dir: &Path, name: &str, text: &str) -> StudyReader {
-    let grid = dir.join(format!("{name}.yaml"));
-    std::fs::write(&grid, text).unwrap();
-    let out = dir.join(format!("{name}.h5"));
-    crate::common::studyrun_ok(
-        dir,
-        &[grid.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"],
-    );
-    StudyReader::open(&out).unwrap()
 }
 
 /// A study with the housing stores `housing_acceleration_x/_y` after the other

@@ -3,24 +3,13 @@
 //! outer-race defect in a run-up shows at BPFO's order in the envelope order
 //! spectrum; sensor series as analysis channels; what a study not asking stores.
 
+use crate::common::run_study as run;
 use std::path::Path;
 
 use studyrun::mechanism::SpeedProfile;
-use studyrun::output::StudyReader;
 use studyrun::signal::order::{whole_revolutions, AngleResampling};
 use studyrun::signal::spectrum::{SpectrumPlan, Window};
 use studyrun::study::Study;
-
-fn run(dir: &Path, name: &str, text: &str) -> StudyReader {
-    let grid = dir.join(format!("{name}.yaml"));
-    std::fs::write(&grid, text).unwrap();
-    let out = dir.join(format!("{name}.h5"));
-    crate::common::studyrun_ok(
-        dir,
-        &[grid.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"],
-    );
-    StudyReader::open(&out).unwrap()
-}
 
 #[test]
 fn a_tone_locked_to_the_crank_angle_is_one_order_line() {

@@ -164,3 +164,16 @@ pub fn production_balance(
         moving,
     }
 }
+
+/// Writes `text` as `dir/<name>.yaml`, runs it into `dir/<name>.h5` (quietly, asserting
+/// success) and opens the result.
+pub fn run_study(dir: &Path, name: &str, text: &str) -> studyrun::StudyReader {
+    let grid = dir.join(format!("{name}.yaml"));
+    std::fs::write(&grid, text).unwrap();
+    let out = dir.join(format!("{name}.h5"));
+    studyrun_ok(
+        dir,
+        &[grid.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"],
+    );
+    studyrun::StudyReader::open(&out).unwrap()
+}
