@@ -2,8 +2,9 @@
 //! is bit-identical to the same study with it in everything they share; the grid
 //! key's refusals; the waviness lines in the envelope spectrum of the bearing force.
 
-use crate::common::run_study as run;
 use std::path::Path;
+
+use crate::common::run_study as run;
 
 use studyrun::signal::metric_specs;
 use studyrun::study::Study;

@@ -3,8 +3,9 @@
 //! outer-race defect in a run-up shows at BPFO's order in the envelope order
 //! spectrum; sensor series as analysis channels; what a study not asking stores.
 
-use crate::common::run_study as run;
 use std::path::Path;
+
+use crate::common::run_study as run;
 
 use studyrun::mechanism::SpeedProfile;
 use studyrun::signal::order::{whole_revolutions, AngleResampling};

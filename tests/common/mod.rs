@@ -139,7 +139,7 @@ pub fn production_balance(
         .unwrap()
         .with_energy_ledger(true);
     let y0 = mech.initial_state();
-    let duration = revolutions * 60.0 / case.rpm;
+    let duration = revolutions * case.revolution_time();
     let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
     let settings = SolverSettings::new(Method::Dop853 { rtol, atol });
     let mut start = None;

@@ -38,7 +38,8 @@ _BY_QUANTITY = {
         "defect_race", "fault",
         "ball_count", "waviness_number", "inner_waviness_number", "outer_waviness_number",
         "min_loaded_balls", "max_loaded_balls", "steps", "rejected_steps", "rhs_evals",
-        "contact_events", "loaded_balls", "speed_profile",
+        "contact_events", "loaded_balls", "speed_profile", "revolution", "replicate",
+        "order", "ftf_order", "bpfo_order", "bpfi_order", "bsf_order",
     ],
     "length": [
         "clearance", "waviness_amplitude", "inner_waviness_amplitude", "outer_waviness_amplitude",
@@ -65,8 +66,12 @@ _BY_QUANTITY = {
 VARIABLES = {name: q for q, names in _BY_QUANTITY.items() for name in names}
 """Variable name -> quantity, for the names that are not derived from another."""
 
-# metric_of_X, spectrum of X and the reference run's X have X's quantity
-_SUFFIXES = ("_spectrum", "_rms_deviation", "_peak_deviation", "_reference_rms")
+# metric_of_X, its value per revolution, spectrum and order spectrum of X and the
+# reference run's X have X's quantity
+_SUFFIXES = (
+    "_per_revolution", "_order_spectrum", "_spectrum", "_rms_deviation", "_peak_deviation",
+    "_reference_rms",
+)
 _PREFIXES = ("reference_",)
 
 
