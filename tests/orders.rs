@@ -96,6 +96,12 @@ fn an_outer_race_defect_shows_at_the_bpfo_order_in_a_run_up() {
     );
     assert_eq!(l.order_spectra[1].units, "N");
     assert_eq!(l.order_spectra[3].units, "N2");
+    let summary = studyrun::inspect(&dir.path().join("runup.h5")).unwrap();
+    let line = summary.lines().find(|s| s.starts_with("orders:")).unwrap();
+    assert!(
+        line.contains(&format!("{} bins", l.orders.len())) && line.ends_with(&names.join(", ")),
+        "{line}"
+    );
     assert!(l
         .spectra
         .iter()

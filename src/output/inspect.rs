@@ -88,6 +88,18 @@ pub fn inspect(path: &Path) -> Result<String> {
             }
         )?;
     }
+    if !l.orders.is_empty() {
+        let names: Vec<&str> = l.order_spectra.iter().map(|s| s.name.as_str()).collect();
+        writeln!(
+            out,
+            "orders:   {} bins 1/{} order apart ({} angle samples over {} whole revolutions): {}",
+            l.orders.len(),
+            attr("order_revolutions"),
+            attr("order_samples"),
+            attr("order_revolutions"),
+            names.join(", ")
+        )?;
+    }
     let failed: Vec<usize> = (0..statuses.len())
         .filter(|&k| statuses[k] == Status::Failed)
         .collect();
