@@ -80,6 +80,23 @@ fn the_issue_example_expands_in_file_order_first_axis_slowest() {
     assert_eq!(study(EXAMPLE).cases, s.cases);
 }
 
+/// Event location is on by default for the explicit pairs, off for SDIRK4, and a
+/// grid can ask for it with SDIRK4 too.
+#[test]
+fn sdirk4_locates_events_when_asked() {
+    let located = |solver: &str| {
+        study(&format!(
+            "name: s\nduration: 0.2\nsample_rate: 1000\nsolver:\n{solver}grid:\n  rpm: [300]\n"
+        ))
+        .solver
+        .locate_events
+    };
+    assert!(located("  method: dop853\n"));
+    assert!(!located("  method: sdirk4\n"));
+    assert!(located("  method: sdirk4\n  locate_events: true\n"));
+    assert!(!located("  method: tsit5\n  locate_events: false\n"));
+}
+
 #[test]
 fn a_minimal_grid_takes_model_defaults() {
     let s = study("name: m\nduration: 0.2\nsample_rate: 1000\ngrid:\n  ball_count: [9]\n  rpm: [300]\n  location: [crank_rod]\n");
@@ -273,10 +290,10 @@ fn invalid_grids_are_refused_with_place_field_and_reason() {
             ],
         ),
         (
-            "solver:\n  method: sdirk4\n  locate_events: false\ngrid:\n  rpm: [300]\n",
+            "solver:\n  method: sdirk4\n  step: 1e-5\ngrid:\n  rpm: [300]\n",
             &[
                 "grid.yaml:6:",
-                "solver.locate_events",
+                "solver.step",
                 "not allowed with method sdirk4",
             ],
         ),

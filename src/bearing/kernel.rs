@@ -91,6 +91,9 @@ pub struct Regime {
     /// The zones of ball vector `i` on defect track `k` at `k n + i`, for `n` ball
     /// vectors (empty without defects).
     zones: Vec<ZoneMasks>,
+    /// Contact band `ε` (m, ≥ 0): a loaded ball leaves the loaded set only once
+    /// `δ_r < −ε` (docs/model.md §8.8); 0 unless switches chatter.
+    band: f64,
 }
 
 impl Regime {
@@ -107,6 +110,19 @@ impl Regime {
     /// The held zone of ball `r` (0-based) on defect track `k`.
     fn zone(&self, k: usize, r: usize) -> Zone {
         self.zones[k * self.loaded.len() + r / LANES].zone(r % LANES)
+    }
+
+    /// The contact band `ε` (m): 0 unless [`Regime::set_band`] widened it.
+    pub fn band(&self) -> f64 {
+        self.band
+    }
+
+    /// Widens the contact band to `band` (m, ≥ 0) for the regimes recorded from now
+    /// on: a loaded ball then stays loaded while `δ_r > −band`, and the switching
+    /// margin counts its exit from `−band` (docs/model.md §8.8).
+    pub fn set_band(&mut self, band: f64) {
+        debug_assert!(band >= 0.0);
+        self.band = band;
     }
 }
 
@@ -202,6 +218,8 @@ struct Held<'a> {
     loaded: &'a [F64x4],
     acting: &'a [F64x4],
     zones: &'a [ZoneMasks],
+    /// [`Regime::band`] (m).
+    band: f64,
 }
 
 impl LoadRule for Natural {
@@ -242,8 +260,10 @@ impl LoadRule for Held<'_> {
 
     #[inline(always)]
     fn margin<V: Lanes>(self, margin: V, l: LaneState<V>, law_switches: bool) -> V {
-        // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone.
-        let m = margin.fast_min(l.loaded.bitselect(l.delta, -l.delta));
+        // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone. A loaded
+        // ball switches at `δ = −ε` ([`Regime::band`]; `δ + 0` is `δ` unless ε > 0).
+        let exit = l.delta + V::splat(self.band);
+        let m = margin.fast_min(l.loaded.bitselect(exit, -l.delta));
         if !law_switches {
             return m;
         }
@@ -261,18 +281,26 @@ impl LoadRule for Held<'_> {
 }
 
 /// Loaded and acting by the natural law, recording both masks of each lane vector
-/// (for [`BallSet::freeze`]).
+/// (for [`BallSet::freeze`]); with a contact band `ε > 0`, a ball the previous
+/// regime had loaded also stays loaded while `δ > −ε`.
 #[derive(Clone, Copy)]
 struct Recording<'a> {
     loaded: &'a [Cell<F64x4>],
     acting: &'a [Cell<F64x4>],
     zones: &'a [Cell<ZoneMasks>],
+    /// [`Regime::band`] (m).
+    band: f64,
 }
 
 impl LoadRule for Recording<'_> {
     #[inline(always)]
     fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V) {
-        let (loaded, d) = Natural.load(i, delta);
+        let (mut loaded, mut d) = Natural.load(i, delta);
+        if self.band > 0.0 {
+            let held = V::load(&self.loaded[i].get()) & delta.simd_gt(V::splat(-self.band));
+            loaded = loaded | held;
+            d = delta & loaded;
+        }
         self.loaded[i].set(loaded.store());
         (loaded, d)
     }
@@ -761,6 +789,7 @@ impl BallSet {
                     loaded: &r.loaded[..n],
                     acting: &r.acting[..n],
                     zones: &r.zones,
+                    band: r.band,
                 };
                 self.sum::<V, _>(s, held)
             }
@@ -776,6 +805,7 @@ impl BallSet {
             loaded: vec![F64x4::ZERO; self.dir_cos.len()],
             acting: vec![F64x4::ZERO; self.dir_cos.len()],
             zones: vec![ZoneMasks::default(); tracks * self.dir_cos.len()],
+            band: 0.0,
         }
     }
 
@@ -792,6 +822,7 @@ impl BallSet {
             loaded: Cell::from_mut(&mut regime.loaded[..]).as_slice_of_cells(),
             acting: Cell::from_mut(&mut regime.acting[..]).as_slice_of_cells(),
             zones: Cell::from_mut(&mut regime.zones[..]).as_slice_of_cells(),
+            band: regime.band,
         };
         self.sum::<F64x4, _>(s, rule);
     }

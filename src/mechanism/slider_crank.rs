@@ -911,6 +911,18 @@ impl OdeSystem for SliderCrank {
     fn margin(&self) -> f64 {
         self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
     }
+
+    /// Gives the contacts the band `ε = atol + rtol·max(|e_x|, |e_y|)` (m) at `y`:
+    /// the error the integrator lets the eccentricity make in a step, a length it
+    /// cannot resolve. A loaded ball then leaves contact at `δ_r = −ε` instead of 0
+    /// (docs/model.md §8.8).
+    fn settle_chatter(&mut self, y: &[f64], rtol: f64, atol: f64) -> bool {
+        let Some(w) = self.bearing.as_mut() else {
+            return false;
+        };
+        w.regime.set_band(atol + rtol * y[0].abs().max(y[1].abs()));
+        true
+    }
 }
 
 /// The journal's `p̈` (m/s², [`SliderCrank::solve`]) and the bearing force (N) of

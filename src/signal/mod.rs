@@ -86,6 +86,11 @@ pub fn metric_specs(envelope: Option<&EnvelopeSettings>) -> Vec<VarSpec> {
             "s",
             "time at which the explicit integrator found the case stiff and SDIRK4 took over (NaN: no switch)",
         ),
+        VarSpec::new(
+            "chatter_time",
+            "s",
+            "time from which contacts were held through chattering switches by the tolerance's band (NaN: never)",
+        ),
     ]);
     if let Some(settings) = envelope {
         specs.extend(envelope_metric_specs(settings));
@@ -400,6 +405,7 @@ pub fn analyse(
         out.stats.rhs_evals as f64,
         out.stats.events as f64,
         out.stats.switched_at.unwrap_or(f64::NAN),
+        out.stats.chatter_at.unwrap_or(f64::NAN),
     ]);
     let mut squared = Vec::new();
     let wants_squared = orders.as_ref().is_some_and(|o| o.settings.envelope);

@@ -5,6 +5,7 @@
 use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, NON_FINITE_CUT};
 use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
+use super::switch::{end_step, settle, ChatterWatch};
 use super::tableau::{DenseOutput, ExplicitTableau, RK4};
 use super::{OdeSystem, SolveError, Stats};
 use crate::error::ModelError;
@@ -295,7 +296,8 @@ fn prepare_dense<S: OdeSystem>(
 /// of the pair's full order ending on it, and the run restarts from there in the new
 /// regime with a fresh first stage. Stepping across a switch instead (where the
 /// compression-only damping force jumps and the Hertz force loses smoothness) costs
-/// cascades of rejected steps and an error of order `h`.
+/// cascades of rejected steps and an error of order `h`. When switches chatter
+/// ([`ChatterWatch`]) the system is told once ([`OdeSystem::settle_chatter`]).
 ///
 /// With `stiffness_test` (and a pair that has one, [`ExplicitTableau::stiffness_bound`])
 /// every accepted step is also shown to Hairer's stiffness test ([`StiffnessTest`]),
@@ -339,6 +341,7 @@ where
         &mut stats,
     )?;
     let mut control = StepController::new(tab.error_order, tab.pi_beta);
+    let mut chatter = ChatterWatch::default();
     let mut t = p.t0;
     // The last model failure of a rejected step, reported if the step size underflows.
     let mut model_failure: Option<SolveError> = None;
@@ -405,31 +408,20 @@ where
                 f0: &k[..n],
                 f1: &k[(s - 1) * n..s * n],
             };
-            let event = if crossed {
-                let nodes = tab.c.iter().chain(tab.dense.iter().flat_map(|d| d.c));
-                let nodes = nodes.copied().zip(margins.iter().copied()).skip(1);
-                locate(
-                    sys,
-                    &ends,
-                    cont,
-                    (start_margin, nodes),
-                    (y_event, f_end),
-                    &mut stats,
-                )?
-            } else {
-                None
-            };
-            let (t_serve, y_serve): (f64, &[f64]) = match event {
-                Some(theta) => (t + theta * h, y_event),
-                None => (t_end, y_new),
-            };
-            accept(sys, t_serve, y_serve)?;
-            samples.serve(sys, t_serve, y_serve, out, |ts, o| {
-                ends.continuous(ends.theta(ts), cont, o);
-            })?;
-            event
+            let nodes = tab.c.iter().chain(tab.dense.iter().flat_map(|d| d.c));
+            let nodes = nodes.copied().zip(margins.iter().copied()).skip(1);
+            end_step(
+                sys,
+                samples,
+                (t, h, t_end),
+                |theta, y| ends.continuous(theta, cont, y),
+                crossed.then_some((start_margin, nodes)),
+                (y_new, y_event, f_end, out),
+                &mut stats,
+            )?
         };
         let Some(theta) = event else {
+            chatter.step(false);
             start_margin = w.margins[s - 1];
             if last {
                 return Ok(Finish::Done(stats));
@@ -456,6 +448,9 @@ where
         let h_event = theta * h;
         let t_new = t + h_event;
         let redone = take_step(sys, tab, (t, h_event), &mut w, &mut stats);
+        if chatter.step(true) {
+            settle(sys, (t_new, &w.y_event), (tol.rtol, tol.atol), &mut stats);
+        }
         sys.hold_regime(t_new, &w.y_event)
             .map_err(|source| SolveError::Model { t: t_new, source })?;
         if let StepOutcome::Done = redone {
@@ -589,94 +584,6 @@ fn stiffness_quotient(tab: &ExplicitTableau, h: f64, k: &[f64]) -> f64 {
     }
 }
 
-/// Relative width (of the step) to which [`locate`] narrows a switch: far below
-/// any step's error, e.g. `1e-14 s` on a `100 µs` step.
-const EVENT_RESOLUTION: f64 = 1e-10;
-
-/// Closest (fraction of the step) a trial point of [`locate`] comes to an end of
-/// its bracket: half of [`EVENT_RESOLUTION`].
-const NUDGE: f64 = 0.5 * EVENT_RESOLUTION;
-
-/// Locates the first regime switch of an accepted step on its continuous extension
-/// `ends` + `cont`, given the switching margin at its start (`≥ 0`) and each
-/// stage's node and margin in `stages`: the switching margin `g(θ)` of the held
-/// regime is evaluated along the extension, at the earliest stage node where it is
-/// negative (the step's end included), to bracket a sign change, which the
-/// Illinois variant of regula falsi then narrows to [`EVENT_RESOLUTION`] (keeping
-/// trial points [`NUDGE`] inside the bracket, bisecting when the secant point is
-/// not strictly inside it, stopping when no time between the ends is left).
-/// Returns the fraction `θ` of the step just past the switch (`g(θ) < 0`) with the
-/// state there in `y_event`, or `None` when the extension does not cross (a stage
-/// state strayed, the trajectory did not). `f_end` is scratch for the slopes; each
-/// `g` costs one evaluation of `f`.
-fn locate<S: OdeSystem>(
-    sys: &mut S,
-    ends: &StepEnds<'_>,
-    cont: &[f64],
-    (g0, stages): (f64, impl Iterator<Item = (f64, f64)>),
-    (y_event, f_end): (&mut [f64], &mut [f64]),
-    stats: &mut Stats,
-) -> Result<Option<f64>, SolveError> {
-    let mut g = |theta: f64, y: &mut [f64]| -> Result<f64, SolveError> {
-        ends.continuous(theta, cont, y);
-        eval(sys, ends.t0 + theta * ends.h, y, f_end, stats)?;
-        Ok(sys.margin())
-    };
-    let mut nodes: Vec<f64> = stages.filter(|&(_, m)| m < 0.0).map(|(c, _)| c).collect();
-    nodes.sort_by(f64::total_cmp);
-    nodes.dedup();
-    let mut bracket = None;
-    for c in nodes {
-        let gc = g(c, y_event)?;
-        if gc < 0.0 {
-            bracket = Some((c, gc));
-            break;
-        }
-    }
-    let Some((mut b, mut gb)) = bracket else {
-        return Ok(None);
-    };
-    let (mut a, mut ga) = (0.0, g0.max(0.0));
-    let mut side = 0;
-    let time = |theta: f64| ends.t0 + theta * ends.h;
-    while b - a > EVENT_RESOLUTION {
-        let resolved = |m: f64| m > a && m < b && time(m) != time(a) && time(m) != time(b);
-        let mut m = (a * gb - b * ga) / (gb - ga);
-        if !(m > a && m < b) {
-            m = 0.5 * (a + b);
-        }
-        // A secant point within the resolution of an end is moved to half the
-        // resolution from it. Once an end sits on the switch, the secant points
-        // crowd it and the other end would only creep in by Illinois halvings (up
-        // to ~30 evaluations); this way the next point either closes the bracket
-        // or moves the far end.
-        m = m.clamp(a + NUDGE, b - NUDGE);
-        if !resolved(m) {
-            // The point is not strictly inside in time: bisect instead.
-            m = 0.5 * (a + b);
-            if !resolved(m) {
-                break;
-            }
-        }
-        let gm = g(m, y_event)?;
-        if gm < 0.0 {
-            (b, gb) = (m, gm);
-            if side == -1 {
-                ga *= 0.5;
-            }
-            side = -1;
-        } else {
-            (a, ga) = (m, gm);
-            if side == 1 {
-                gb *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    ends.continuous(b, cont, y_event);
-    Ok(Some(b))
-}
-
 /// Classic RK4 with fixed step `step` (s): step `i` starts at `t0 + i·step`, the last
 /// one is shortened to end exactly at the final time. Sample times inside a step get
 /// the cubic Hermite interpolant of the step's end values and slopes; the end slope
@@ -787,79 +694,5 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// A system whose switching margin is `SWITCH − y` (m); [`locate`] takes the
-    /// state from the continuous extension and only the margin from the system.
-    struct Ramp {
-        margin: f64,
-    }
-
-    const SWITCH: f64 = 0.3;
-
-    impl OdeSystem for Ramp {
-        fn dim(&self) -> usize {
-            1
-        }
-
-        fn rhs(&mut self, _t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
-            self.margin = SWITCH - y[0];
-            dydt[0] = 0.0;
-            Ok(())
-        }
-
-        fn margin(&self) -> f64 {
-            self.margin
-        }
-    }
-
-    /// Once an end of the bracket sits on the switch (here the first, from a stage
-    /// node), the bracket must close at once instead of the far end creeping in by
-    /// bisection (33 evaluations here without [`NUDGE`]).
-    #[test]
-    fn a_switch_is_located_in_few_evaluations() {
-        // The cubic Hermite extension is exact for `y = θ + θ²`. Late in a run
-        // (`t0` = 1000 s) time resolves only ~1e-13 of the step: the secant points
-        // next to an end on the switch are not distinct times.
-        let ends = StepEnds {
-            t0: 1000.0,
-            h: 1.0,
-            y0: &[0.0],
-            y1: &[2.0],
-            f0: &[1.0],
-            f1: &[3.0],
-        };
-        let mut sys = Ramp { margin: 0.0 };
-        let mut stats = Stats::default();
-        let (mut y_event, mut f_end) = ([0.0], [0.0]);
-        let switch = ((1.0 + 4.0 * SWITCH).sqrt() - 1.0) / 2.0;
-        // A stage node on the switch (the first float past it on the extension)
-        // brackets it at once, from far below.
-        let mut node = switch;
-        let mut y = [0.0];
-        loop {
-            ends.continuous(node, &[], &mut y);
-            if SWITCH - y[0] < 0.0 {
-                break;
-            }
-            node = f64::from_bits(node.to_bits() + 1);
-        }
-        let stages = [(node, SWITCH - y[0]), (1.0, SWITCH - 2.0)];
-        let theta = locate(
-            &mut sys,
-            &ends,
-            &[],
-            (SWITCH, stages.into_iter()),
-            (&mut y_event, &mut f_end),
-            &mut stats,
-        )
-        .unwrap()
-        .unwrap();
-        assert!(
-            (theta - switch).abs() <= EVENT_RESOLUTION,
-            "θ = {theta}, switch at {switch}"
-        );
-        assert!(SWITCH - y_event[0] < 0.0, "the state is past the switch");
-        assert!(stats.rhs_evals <= 3, "{} evaluations", stats.rhs_evals);
     }
 }

@@ -24,6 +24,8 @@
 
 use crate::error::ModelError;
 
+pub use switch::CHATTER_SWITCHES;
+
 /// A first-order ODE system `y' = f(t, y)`.
 pub trait OdeSystem {
     /// Number of state variables.
@@ -60,6 +62,15 @@ pub trait OdeSystem {
     /// crossed a switching surface; `+∞` by default.
     fn margin(&self) -> f64 {
         f64::INFINITY
+    }
+
+    /// Told that located switches chatter (one step after another ends at one, at
+    /// state `y`): a system that can widens its switching surfaces by what the
+    /// tolerances `rtol` and `atol` resolve, for the regimes held from now on, and
+    /// returns whether it did. The default cannot and returns `false`.
+    fn settle_chatter(&mut self, y: &[f64], rtol: f64, atol: f64) -> bool {
+        let _ = (y, rtol, atol);
+        false
     }
 }
 
@@ -141,9 +152,11 @@ pub struct SolverSettings {
     pub max_steps: u64,
     /// Largest step an adaptive method may take (s); `f64::INFINITY` for no limit.
     pub max_step: f64,
-    /// Whether the explicit adaptive pairs locate the regime switches of a
+    /// Whether the adaptive methods locate the regime switches of a
     /// piecewise-smooth system ([`OdeSystem::hold_regime`]) and restart there,
-    /// instead of stepping across them. On by default; other methods ignore it.
+    /// instead of stepping across them. On by default for the explicit pairs, off
+    /// for [`Method::Sdirk4`]; [`Method::Rk4`] ignores it. SDIRK4 continuing a run
+    /// found stiff takes the explicit pair's setting.
     pub locate_events: bool,
     /// Whether the explicit adaptive pairs test for stiffness as they go (Hairer's
     /// test on the last two stages, HNW II §IV.2) and, once it is positive, continue
@@ -155,14 +168,15 @@ pub struct SolverSettings {
 }
 
 impl SolverSettings {
-    /// Settings for `method` with a budget of 10 million steps, no step limit, and
-    /// event location and the switch to SDIRK4 on stiffness on.
+    /// Settings for `method` with a budget of 10 million steps, no step limit, the
+    /// switch to SDIRK4 on stiffness on, and event location on for the explicit
+    /// pairs (off for SDIRK4 and RK4).
     pub fn new(method: Method) -> Self {
         Self {
             method,
             max_steps: 10_000_000,
             max_step: f64::INFINITY,
-            locate_events: true,
+            locate_events: !matches!(method, Method::Sdirk4 { .. } | Method::Rk4 { .. }),
             stiffness_switch: true,
         }
     }
@@ -188,9 +202,13 @@ pub struct Stats {
     pub jacobians: u64,
     /// LU factorisations of the iteration matrix (implicit methods only).
     pub factorizations: u64,
-    /// Regime switches located and restarted at (explicit adaptive pairs with
+    /// Regime switches located and restarted at (adaptive methods with
     /// [`SolverSettings::locate_events`]); each also counts as an accepted step.
     pub events: u64,
+    /// Time (s) from which the system holds its contacts through chatter
+    /// ([`OdeSystem::settle_chatter`], once [`CHATTER_SWITCHES`] of the last 64
+    /// accepted steps ended at a located switch); `None` when it never did.
+    pub chatter_at: Option<f64>,
     /// Time (s) at which an explicit pair found the problem stiff and SDIRK4 took
     /// over ([`SolverSettings::stiffness_switch`]); `None` when the method asked
     /// for ran to the end. The counters above cover both methods.
@@ -261,6 +279,7 @@ mod eval;
 mod explicit;
 mod output;
 mod sdirk;
+mod switch;
 mod tableau;
 mod validate;
 
@@ -338,22 +357,23 @@ where
         Method::Rk4 { step } => return explicit::rk4(sys, &problem, step, &mut samples),
         Method::Sdirk4 { rtol, atol } => {
             let tol = control::Tolerance { rtol, atol };
-            return sdirk::sdirk4(sys, &problem, tol, &mut samples, Stats::default());
+            return sdirk::sdirk4(sys, &problem, tol, &mut samples, (Stats::default(), false));
         }
     };
     let stiffness = settings.stiffness_switch;
     match explicit::adaptive(sys, tableau, &problem, tol, stiffness, &mut samples)? {
         explicit::Finish::Done(stats) => Ok(stats),
         explicit::Finish::Stiff { t, y, stats } => {
-            // The rest of the run on SDIRK4, at the same tolerances, with the natural
-            // law (it steps across switches) and the work so far in its counters.
+            // The rest of the run on SDIRK4, at the same tolerances and event
+            // location, with the work so far in its counters and its steps ending
+            // on the sample times.
             sys.release_regime();
             let rest = eval::Problem {
                 t0: t,
                 y0: &y,
                 ..problem
             };
-            let mut stats = sdirk::sdirk4(sys, &rest, tol, &mut samples, stats)?;
+            let mut stats = sdirk::sdirk4(sys, &rest, tol, &mut samples, (stats, true))?;
             stats.switched_at = Some(t);
             Ok(stats)
         }

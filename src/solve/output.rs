@@ -31,6 +31,11 @@ impl<'a, O> Samples<'a, O> {
         self.serve(sys, t0, y0, &mut [], |_, _| {})
     }
 
+    /// The time of the next sample still to be served (s).
+    pub fn next_time(&self) -> Option<f64> {
+        self.times.get(self.next).copied()
+    }
+
     /// Whether a sample still to be served lies strictly before `t` (s).
     pub fn pending_before(&self, t: f64) -> bool {
         self.times.get(self.next).is_some_and(|&s| s < t)

@@ -20,12 +20,17 @@
 //! like `max_step²`; Hairer's quartic continuous extension behaves the same way).
 
 use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, NON_FINITE_CUT};
-use super::eval::{accept, eval, first_non_finite, Problem};
+use super::eval::{eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
+use super::switch::{end_step, settle, ChatterWatch};
 use super::tableau::{SdirkTableau, SDIRK4};
 use super::{OdeSystem, SolveError, Stats};
 use crate::error::ModelError;
 use crate::numeric::linalg::Lu;
+
+/// With `land_on_samples`, a step is shortened to end on a sample time inside it
+/// unless that time is within this fraction of the step from its start.
+const LANDING_MIN: f64 = 0.01;
 
 /// Most simplified-Newton iterations per stage.
 const MAX_NEWTON: usize = 7;
@@ -72,6 +77,11 @@ struct Workspace {
     scratch: Vec<f64>,
     /// Interpolated state handed to the observer.
     out: Vec<f64>,
+    /// Switching margin after the last evaluation of each stage, when events are
+    /// located ([`OdeSystem::margin`]); `+∞` for stages not evaluated.
+    margins: Vec<f64>,
+    /// State at a located event.
+    y_event: Vec<f64>,
 }
 
 impl Workspace {
@@ -95,6 +105,29 @@ impl Workspace {
             stage: v(),
             scratch: v(),
             out: v(),
+            margins: vec![f64::INFINITY; stages],
+            y_event: v(),
+        }
+    }
+
+    /// The new state `y + Σ b_j h k_j` into `y_new`, the end slope `h k_s / h` into
+    /// `f_end`, and the embedded error estimate `Σ (b_j − b̂_j) h k_j` into `delta`,
+    /// from the stages of a step of size `h` (s).
+    fn finish_step(&mut self, tab: &SdirkTableau, h: f64) {
+        let (n, s) = (self.n, tab.stages());
+        // Stiffly accurate: y + Σ b_j h k_j is the last stage value y + z_s, and
+        // h k_s / h is the slope there.
+        for m in 0..n {
+            let mut acc = 0.0;
+            let mut est = 0.0;
+            for (j, (b, b_hat)) in tab.b.iter().zip(tab.b_hat).enumerate() {
+                let hk = self.hk[j * n + m];
+                acc += b * hk;
+                est += (b - b_hat) * hk;
+            }
+            self.y_new[m] = self.y[m] + acc;
+            self.delta[m] = est;
+            self.f_end[m] = self.hk[(s - 1) * n + m] / h;
         }
     }
 
@@ -198,6 +231,7 @@ fn solve_stages<S: OdeSystem>(
             if let Err(e) = eval(sys, ti, &w.stage, &mut w.f_eval, stats) {
                 return Ok(StageOutcome::ModelFailed(e));
             }
+            w.margins[i] = sys.margin();
             for m in 0..n {
                 w.delta[m] = w.r[m] + h * g * w.f_eval[m] - w.z[m];
             }
@@ -244,15 +278,26 @@ fn solve_stages<S: OdeSystem>(
 /// refresh the Jacobian if it is not current), non-finite stages cut it by 10.
 /// Sample times inside a step get the cubic Hermite interpolant.
 ///
+/// With [`Problem::locate_events`] and a system with regimes, every step runs with
+/// the regime of its start held fixed (its Jacobian too), as for the explicit pairs:
+/// when a stage's switching margin turns negative, the switch is located on the
+/// step's Hermite interpolant ([`locate`]), the state there is recomputed by an
+/// SDIRK4 step ending on it, and the run restarts from there in the new regime with
+/// a fresh Jacobian. Without it, steps run across switches with the natural law.
+///
 /// `stats` holds the work done before `p.t0` (zero for a run of its own; an explicit
 /// pair's when SDIRK4 takes over a run it found stiff): the counters go on from
-/// there, and the step budget counts them.
+/// there, and the step budget counts them. With `land_on_samples` every step that
+/// would pass over a sample time ends on it instead (unless the time is within
+/// [`LANDING_MIN`] of the step from its start), so samples are step ends, not
+/// interpolated: on stiff components the interpolant's slopes are off by the
+/// state's error times the stiff eigenvalue, while the step ends stay accurate.
 pub(crate) fn sdirk4<S, O>(
     sys: &mut S,
     p: &Problem<'_>,
     tol: Tolerance,
     samples: &mut Samples<'_, O>,
-    stats: Stats,
+    (stats, land_on_samples): (Stats, bool),
 ) -> Result<Stats, SolveError>
 where
     S: OdeSystem,
@@ -261,10 +306,16 @@ where
     let tab = &SDIRK4;
     let s = tab.stages();
     let mut w = Workspace::new(p.y0, s);
-    let n = w.n;
     let mut stats = stats;
+    let events = p.locate_events
+        && sys
+            .hold_regime(p.t0, p.y0)
+            .map_err(|source| SolveError::Model { t: p.t0, source })?;
     samples.serve_start(sys, p.t0, p.y0)?;
     eval(sys, p.t0, p.y0, &mut w.f_cur, &mut stats)?;
+    // Switching margin at the start of the current step (≥ 0 when events are located).
+    let mut start_margin = sys.margin();
+    let mut chatter = ChatterWatch::default();
     let mut h = initial_step(
         sys,
         p,
@@ -287,12 +338,19 @@ where
     loop {
         let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
         h = h_try;
+        let landing = samples
+            .next_time()
+            .filter(|&ts| land_on_samples && !last && ts > t + LANDING_MIN * h && ts < t + h);
+        if let Some(ts) = landing {
+            h = ts - t;
+        }
         if need_jac {
             w.jacobian(sys, t, &mut stats)?;
             need_jac = false;
             jac_current = true;
             h_factored = f64::NAN;
         }
+        w.margins.fill(f64::INFINITY);
         let outcome = if h == h_factored || w.factor(h * tab.gamma, &mut stats) {
             h_factored = h;
             solve_stages(sys, tab, tol, (t, h), &mut w, &mut eta, &mut stats)?
@@ -302,20 +360,7 @@ where
         };
         let cut = match outcome {
             StageOutcome::Converged { theta_max } => {
-                // Stiffly accurate: y + Σ b_j h k_j is the last stage value y + z_s, and
-                // h k_s / h is the slope there.
-                for m in 0..n {
-                    let mut acc = 0.0;
-                    let mut est = 0.0;
-                    for (j, (b, b_hat)) in tab.b.iter().zip(tab.b_hat).enumerate() {
-                        let hk = w.hk[j * n + m];
-                        acc += b * hk;
-                        est += (b - b_hat) * hk;
-                    }
-                    w.y_new[m] = w.y[m] + acc;
-                    w.delta[m] = est;
-                    w.f_end[m] = w.hk[(s - 1) * n + m] / h;
-                }
+                w.finish_step(tab, h);
                 w.lu.solve_in_place(&mut w.delta, &mut w.scratch);
                 let err = tol.norm(&w.delta, &w.y, &w.y_new);
                 match control.judge(err, h) {
@@ -326,19 +371,76 @@ where
                     }
                     Verdict::Accept(h_new) => {
                         stats.steps += 1;
-                        let t_new = if last { p.t_end } else { t + h };
-                        accept(sys, t_new, &w.y_new)?;
-                        let ends = StepEnds {
-                            t0: t,
-                            h,
-                            y0: &w.y,
-                            y1: &w.y_new,
-                            f0: &w.f_cur,
-                            f1: &w.f_end,
+                        let t_new = if last {
+                            p.t_end
+                        } else {
+                            landing.unwrap_or(t + h)
                         };
-                        samples.serve(sys, t_new, &w.y_new, &mut w.out, |ts, out| {
-                            ends.hermite(ends.theta(ts), out);
-                        })?;
+                        let crossed = events && w.margins.iter().any(|&m| m < 0.0);
+                        let event = {
+                            let Workspace {
+                                y,
+                                y_new,
+                                f_cur,
+                                f_end,
+                                f_eval,
+                                out,
+                                margins,
+                                y_event,
+                                ..
+                            } = &mut w;
+                            let ends = StepEnds {
+                                t0: t,
+                                h,
+                                y0: y,
+                                y1: y_new,
+                                f0: f_cur,
+                                f1: f_end,
+                            };
+                            let nodes = tab.c.iter().copied().zip(margins.iter().copied());
+                            end_step(
+                                sys,
+                                samples,
+                                (t, h, t_new),
+                                |theta, y| ends.hermite(theta, y),
+                                crossed.then_some((start_margin, nodes)),
+                                (y_new, y_event, f_eval, out),
+                                &mut stats,
+                            )?
+                        };
+                        if let Some(theta) = event {
+                            // The switch: the state there from an SDIRK4 step ending on
+                            // it in the held regime (the Hermite interpolant if that
+                            // step fails), then the new regime and a fresh Jacobian.
+                            stats.events += 1;
+                            let h_event = theta * h;
+                            if w.factor(h_event * tab.gamma, &mut stats) {
+                                let redone = (t, h_event);
+                                if let StageOutcome::Converged { .. } = solve_stages(
+                                    sys, tab, tol, redone, &mut w, &mut eta, &mut stats,
+                                )? {
+                                    w.finish_step(tab, h_event);
+                                    w.y_event.copy_from_slice(&w.y_new);
+                                }
+                            }
+                            t += h_event;
+                            if chatter.step(true) {
+                                settle(sys, (t, &w.y_event), (tol.rtol, tol.atol), &mut stats);
+                            }
+                            sys.hold_regime(t, &w.y_event)
+                                .map_err(|source| SolveError::Model { t, source })?;
+                            std::mem::swap(&mut w.y, &mut w.y_event);
+                            eval(sys, t, &w.y, &mut w.f_cur, &mut stats)?;
+                            start_margin = sys.margin();
+                            model_failure = None;
+                            need_jac = true;
+                            jac_current = false;
+                            h_factored = f64::NAN;
+                            h = h_new;
+                            continue;
+                        }
+                        chatter.step(false);
+                        start_margin = w.margins[s - 1];
                         if last {
                             return Ok(stats);
                         }

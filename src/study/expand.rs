@@ -2290,10 +2290,6 @@ fn solver(
             ],
             "a fixed `step` (s)",
         ),
-        Method::Sdirk4 { .. } => (
-            vec![("step", given(&s.step)), ("locate_events", events)],
-            "`rtol`, `atol` and `max_step`",
-        ),
         _ => (
             vec![("step", given(&s.step))],
             "`rtol`, `atol`, `max_step` and `locate_events`",

@@ -54,7 +54,7 @@ _BY_QUANTITY = {
     "damping": ["damping", "c_h"],
     "mass": ["crank_mass", "rod_mass", "slider_mass", "m_h"],
     "inertia": ["crank_inertia", "rod_inertia", "slider_inertia"],
-    "time": ["time", "wall_time", "stiffness_switch_time", "speed_over"],
+    "time": ["time", "wall_time", "stiffness_switch_time", "chatter_time", "speed_over"],
     "frequency": ["frequency", "speed_frequency"],
     "acceleration": ["slider_acceleration", "housing_acceleration_x", "housing_acceleration_y"],
     "moment": ["crank_moment"],
