@@ -94,6 +94,8 @@ pub struct Regime {
     /// Contact band `ε` (m, ≥ 0): a loaded ball leaves the loaded set only once
     /// `δ_r < −ε` (docs/model.md §8.8); 0 unless switches chatter.
     band: f64,
+    /// Bit `i` set: the `i`-th latest [`BallSet::freeze`] changed the loaded set.
+    contact_changes: u64,
 }
 
 impl Regime {
@@ -115,6 +117,12 @@ impl Regime {
     /// The contact band `ε` (m): 0 unless [`Regime::set_band`] widened it.
     pub fn band(&self) -> f64 {
         self.band
+    }
+
+    /// How many of the last 64 regimes recorded ([`BallSet::freeze`]) changed the
+    /// set of loaded balls (a contact onset or exit, not a damping or zone switch).
+    pub fn recent_contact_changes(&self) -> u32 {
+        self.contact_changes.count_ones()
     }
 
     /// Widens the contact band to `band` (m, ≥ 0) for the regimes recorded from now
@@ -290,18 +298,30 @@ struct Recording<'a> {
     zones: &'a [Cell<ZoneMasks>],
     /// [`Regime::band`] (m).
     band: f64,
+    /// Set when a lane's loaded mask differs from the previous regime's.
+    changed: &'a Cell<bool>,
 }
 
 impl LoadRule for Recording<'_> {
     #[inline(always)]
     fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V) {
+        let previous = self.loaded[i].get();
         let (mut loaded, mut d) = Natural.load(i, delta);
         if self.band > 0.0 {
-            let held = V::load(&self.loaded[i].get()) & delta.simd_gt(V::splat(-self.band));
+            let held = V::load(&previous) & delta.simd_gt(V::splat(-self.band));
             loaded = loaded | held;
             d = delta & loaded;
         }
-        self.loaded[i].set(loaded.store());
+        let recorded = loaded.store();
+        let differs = |a: &F64x4, b: &F64x4| {
+            a.0.iter()
+                .zip(&b.0)
+                .any(|(x, y)| x.to_bits() != y.to_bits())
+        };
+        if differs(&recorded, &previous) {
+            self.changed.set(true);
+        }
+        self.loaded[i].set(recorded);
         (loaded, d)
     }
 
@@ -806,6 +826,7 @@ impl BallSet {
             acting: vec![F64x4::ZERO; self.dir_cos.len()],
             zones: vec![ZoneMasks::default(); tracks * self.dir_cos.len()],
             band: 0.0,
+            contact_changes: 0,
         }
     }
 
@@ -818,13 +839,16 @@ impl BallSet {
     /// from the same sines and cosines the evaluations see.
     pub fn freeze(&mut self, s: &ContactState, angle: Option<f64>, regime: &mut Regime) {
         self.prepare::<F64x4>(s, angle);
+        let changed = Cell::new(false);
         let rule = Recording {
             loaded: Cell::from_mut(&mut regime.loaded[..]).as_slice_of_cells(),
             acting: Cell::from_mut(&mut regime.acting[..]).as_slice_of_cells(),
             zones: Cell::from_mut(&mut regime.zones[..]).as_slice_of_cells(),
             band: regime.band,
+            changed: &changed,
         };
         self.sum::<F64x4, _>(s, rule);
+        regime.contact_changes = (regime.contact_changes << 1) | u64::from(changed.get());
     }
 
     /// The kernel under load rule `rule`, once [`BallSet::prepare`] has run for `s`.

@@ -44,7 +44,7 @@ use crate::bearing::{BallSet, BallSum, CageWeights, ContactState, Regime};
 use crate::error::{ModelError, ParamError};
 use crate::multibody::Ledger;
 use crate::numeric::simd::{dispatch, Isa, LaneTask, Lanes};
-use crate::solve::OdeSystem;
+use crate::solve::{OdeSystem, CHATTER_SWITCHES};
 
 use super::{CaseParams, CrankDrive, CrankMotion, Housing, Location, Sample, GRAVITY};
 
@@ -912,14 +912,19 @@ impl OdeSystem for SliderCrank {
         self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
     }
 
-    /// Gives the contacts the band `ε = atol + rtol·max(|e_x|, |e_y|)` (m) at `y`:
-    /// the error the integrator lets the eccentricity make in a step, a length it
-    /// cannot resolve. A loaded ball then leaves contact at `δ_r = −ε` instead of 0
-    /// (docs/model.md §8.8).
+    /// When at least [`CHATTER_SWITCHES`] of the last 64 regimes recorded changed
+    /// the loaded set (the chatter is of contact onsets and exits, not of damping or
+    /// defect-zone switches), gives the contacts the band
+    /// `ε = atol + rtol·max(|e_x|, |e_y|)` (m) at `y`: the error the integrator lets
+    /// the eccentricity make in a step, a length it cannot resolve. A loaded ball
+    /// then leaves contact at `δ_r = −ε` instead of 0 (docs/model.md §8.8).
     fn settle_chatter(&mut self, y: &[f64], rtol: f64, atol: f64) -> bool {
         let Some(w) = self.bearing.as_mut() else {
             return false;
         };
+        if w.regime.recent_contact_changes() < CHATTER_SWITCHES {
+            return false;
+        }
         w.regime.set_band(atol + rtol * y[0].abs().max(y[1].abs()));
         true
     }
