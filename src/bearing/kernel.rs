@@ -1392,4 +1392,43 @@ mod tests {
             assert!((sum.force[1] - fy).abs() <= 1e-12 * largest, "{held:?}");
         }
     }
+
+    /// With a band `ε` a loaded ball stays loaded down to `δ = −ε`: the margin of the
+    /// held regime counts its exit from `−ε`, and a regime recorded inside the band
+    /// keeps it (and records no contact change); without the band it leaves at 0.
+    #[test]
+    fn a_band_holds_a_loaded_ball_down_to_minus_epsilon() {
+        let mut set = BallSet::new(&BearingParams::default());
+        let state = |e: [f64; 2]| ContactState {
+            e,
+            v: [0.0, 0.0],
+            cage: 0.0,
+            psi_in: 0.0,
+            psi_out: 0.0,
+        };
+        let n = set.ball(0, &state([0.0, 0.0])).normal;
+        let origin = set.ball(0, &state([0.0, 0.0])).delta;
+        // Ball 0's deflection is `origin + ρ` along its normal; the others stay open.
+        let along = |delta: f64| state([(delta - origin) * n[0], (delta - origin) * n[1]]);
+        let (band, inside) = (1e-10, -5e-11);
+        assert!((set.ball(0, &along(inside)).delta - inside).abs() < 1e-13);
+        for with_band in [false, true] {
+            let mut regime = set.no_regime();
+            if with_band {
+                regime.set_band(band);
+            }
+            set.freeze(&along(1e-9), None, &mut regime);
+            assert!(regime.loaded(0));
+            assert_eq!(regime.recent_contact_changes(), 1);
+            let margin = set.force_in(&along(inside), &regime).margin;
+            assert_eq!(margin >= 0.0, with_band, "margin {margin:e}");
+            assert!(set.force_in(&along(-2.0 * band), &regime).margin < 0.0);
+            set.freeze(&along(inside), None, &mut regime);
+            assert_eq!(regime.loaded(0), with_band);
+            assert_eq!(
+                regime.recent_contact_changes(),
+                if with_band { 1 } else { 2 }
+            );
+        }
+    }
 }
