@@ -220,13 +220,14 @@ struct LaneState<V> {
 #[derive(Clone, Copy)]
 struct Natural;
 
-/// Loaded and acting as a held regime says.
+/// Loaded and acting as a held regime says; `BANDED` when it has a contact band
+/// (a run without one pays nothing for it).
 #[derive(Clone, Copy)]
-struct Held<'a> {
+struct Held<'a, const BANDED: bool> {
     loaded: &'a [F64x4],
     acting: &'a [F64x4],
     zones: &'a [ZoneMasks],
-    /// [`Regime::band`] (m).
+    /// [`Regime::band`] (m), read only when `BANDED`.
     band: f64,
 }
 
@@ -254,7 +255,7 @@ impl LoadRule for Natural {
     }
 }
 
-impl LoadRule for Held<'_> {
+impl<const BANDED: bool> LoadRule for Held<'_, BANDED> {
     #[inline(always)]
     fn load<V: Lanes>(self, i: usize, delta: V) -> (V, V) {
         let loaded = V::load(&self.loaded[i]);
@@ -269,8 +270,12 @@ impl LoadRule for Held<'_> {
     #[inline(always)]
     fn margin<V: Lanes>(self, margin: V, l: LaneState<V>, law_switches: bool) -> V {
         // Pads (δ = −∞, never loaded) give +∞ and leave the margin alone. A loaded
-        // ball switches at `δ = −ε` ([`Regime::band`]; `δ + 0` is `δ` unless ε > 0).
-        let exit = l.delta + V::splat(self.band);
+        // ball switches at `δ = −ε` ([`Regime::band`]).
+        let exit = if BANDED {
+            l.delta + V::splat(self.band)
+        } else {
+            l.delta
+        };
         let m = margin.fast_min(l.loaded.bitselect(exit, -l.delta));
         if !law_switches {
             return m;
@@ -805,13 +810,25 @@ impl BallSet {
             Some(r) => {
                 // Cut to the ball vectors, so the loop's look-ups carry no bounds checks.
                 let n = self.dir_cos.len();
-                let held = Held {
-                    loaded: &r.loaded[..n],
-                    acting: &r.acting[..n],
-                    zones: &r.zones,
-                    band: r.band,
-                };
-                self.sum::<V, _>(s, held)
+                let (loaded, acting, zones, band) =
+                    (&r.loaded[..n], &r.acting[..n], &r.zones[..], r.band);
+                if band > 0.0 {
+                    let held = Held::<true> {
+                        loaded,
+                        acting,
+                        zones,
+                        band,
+                    };
+                    self.sum::<V, _>(s, held)
+                } else {
+                    let held = Held::<false> {
+                        loaded,
+                        acting,
+                        zones,
+                        band,
+                    };
+                    self.sum::<V, _>(s, held)
+                }
             }
             None => self.sum::<V, _>(s, Natural),
         };
