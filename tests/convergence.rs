@@ -1,5 +1,6 @@
 //! Convergence of the integrators on the mechanism, and agreement between them.
 
+use crate::common::channel_difference;
 use studyrun::bearing::RaceWaviness;
 use studyrun::mechanism::{CaseParams, Location};
 use studyrun::simulate::{simulate, CaseOutput, Sampling};
@@ -7,15 +8,7 @@ use studyrun::solve::{Method, SolverSettings};
 
 /// Max over the run of |a − b| for `channel`, relative to the channel's range in `b`.
 fn relative_difference(a: &CaseOutput, b: &CaseOutput, channel: &str) -> f64 {
-    let (x, y) = (a.channel(channel).unwrap(), b.channel(channel).unwrap());
-    let (lo, hi) = y
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
-    x.iter()
-        .zip(y)
-        .map(|(p, q)| (p - q).abs())
-        .fold(0.0, f64::max)
-        / (hi - lo)
+    channel_difference(a, b, channel, 0)
 }
 
 fn run(case: &CaseParams, method: Method, sampling: &Sampling) -> CaseOutput {

@@ -14,6 +14,8 @@ use studyrun::output::{
 use studyrun::signal::spectrum::{frequencies, SpectrumPlan, Window};
 use studyrun::simulate::CHANNELS;
 
+use crate::common::bits;
+
 const N_TIME: usize = 1001;
 const SAMPLE_RATE: f64 = 1000.0;
 const CASE_IDS: [u64; 6] = [3, 5, 7, 9, 11, 13];
@@ -218,10 +220,6 @@ fn write_synthetic(path: &Path, storage: Storage) -> (usize, f64) {
     writer.finish().unwrap();
     seconds += start.elapsed().as_secs_f64();
     (raw, seconds)
-}
-
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
 }
 
 /// Checks every row of the file at `path` against the synthetic data, with values

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::common::run_study as run;
+use crate::common::{channel_difference, run_study as run};
 
 use studyrun::mechanism::{CaseParams, Housing, Location, SliderCrank, SpeedProfile};
 use studyrun::output::{ParamValues, StudyReader};
@@ -38,23 +38,6 @@ fn tight() -> SolverSettings {
     })
 }
 
-/// The largest |difference| of channel `name` between `a` and `b` from sample
-/// `from` on, over the range of `b`'s there.
-fn relative_difference(a: &CaseOutput, b: &CaseOutput, name: &str, from: usize) -> f64 {
-    let (a, b) = (
-        &a.channel(name).unwrap()[from..],
-        &b.channel(name).unwrap()[from..],
-    );
-    let range = b.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
-        - b.iter().fold(f64::INFINITY, |m, &x| m.min(x));
-    let worst = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max);
-    worst / range
-}
-
 /// As `k_h` grows from 1e7 to 1e10 N/m (the damping ratio fixed at 2 %), the
 /// preloaded case converges to the rigid ground: over its third crank revolution
 /// (after the housing's start-up ringing has decayed), in the slider acceleration,
@@ -85,7 +68,7 @@ fn a_stiffening_housing_converges_to_the_rigid_ground() {
         let sprung = simulate(&case, &tight(), &sampling).unwrap();
         let diffs: Vec<f64> = channels
             .iter()
-            .map(|ch| relative_difference(&sprung, &rigid, ch, from))
+            .map(|ch| channel_difference(&sprung, &rigid, ch, from))
             .collect();
         let shown: Vec<String> = diffs.iter().map(|d| format!("{d:.3e}")).collect();
         println!("k_h {k_h:e}: {channels:?} differ by {shown:?} of their ranges");

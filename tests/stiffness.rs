@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use crate::common::{production_balance, VanDerPol};
+use crate::common::{channel_difference, production_balance, VanDerPol};
 use crate::hard_cases::stiff_case;
 use studyrun::bearing::{DampingModel, RaceWaviness};
 use studyrun::error::ModelError;
@@ -266,7 +266,7 @@ fn stiff_cases_finish_by_default_and_match_a_tight_reference() {
             ("crank_moment", 1e-3),
             ("bearing_force", 1e-2),
         ] {
-            let d = relative_difference(&run, &reference, channel, usize::MAX);
+            let d = channel_difference(&run, &reference, channel, 0);
             println!("C = {damping:e}: {channel} differs from the reference by {d:.2e} of range (bound {bound:e})");
             assert!(d < bound, "C = {damping:e}: {channel} differs by {d:e}");
         }
@@ -288,7 +288,7 @@ fn stiff_cases_finish_by_default_and_match_a_tight_reference() {
             "slider_acceleration",
             "bearing_force",
         ] {
-            let d = relative_difference(&reference, &check, channel, usize::MAX);
+            let d = channel_difference(&reference, &check, channel, 0);
             println!("C = {damping:e}: over 2 ms, SDIRK4 1e-11 vs DOP853 1e-11 without the switch: {channel} {d:.2e} of range");
             assert!(
                 d < 1e-5,
@@ -296,22 +296,6 @@ fn stiff_cases_finish_by_default_and_match_a_tight_reference() {
             );
         }
     }
-}
-
-/// Largest difference of `channel` between `a` and `b` over the first `n` samples,
-/// relative to its range in `b`.
-fn relative_difference(a: &CaseOutput, b: &CaseOutput, channel: &str, n: usize) -> f64 {
-    let (x, y) = (a.channel(channel).unwrap(), b.channel(channel).unwrap());
-    let n = n.min(x.len());
-    let (lo, hi) = y[..n]
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
-    x[..n]
-        .iter()
-        .zip(&y[..n])
-        .map(|(p, q)| (p - q).abs())
-        .fold(0.0, f64::max)
-        / (hi - lo)
 }
 
 /// A paper case (9 balls, 40 µm clearance, crank_ground, 300 rpm) with
@@ -363,7 +347,7 @@ fn chattering_contacts_finish_by_default() {
         let reference = simulate(&case, &tight, &sampling).unwrap();
         println!("C = {damping:e}: reference {:?}", reference.stats);
         for channel in ["eccentricity_x", "eccentricity_y"] {
-            let worst = relative_difference(&run, &reference, channel, usize::MAX);
+            let worst = channel_difference(&run, &reference, channel, 0);
             let rms = relative_rms_difference(&run, &reference, channel);
             println!("C = {damping:e}: {channel} differs by {rms:.1e} (RMS), {worst:.1e} (worst) of range");
             assert!(

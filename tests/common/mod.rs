@@ -6,6 +6,43 @@ pub mod hard;
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// The bits of `values`, for comparisons that tell `-0.0` from `0.0` and match NaN.
+pub fn bits(values: &[f64]) -> Vec<u64> {
+    values.iter().map(|x| x.to_bits()).collect()
+}
+
+/// Case `row` of `reader` with its `wall_time` metric set to 0: the one value two
+/// runs of the same case do not share.
+pub fn read_case_but_wall_time(
+    reader: &studyrun::StudyReader,
+    row: usize,
+) -> studyrun::output::CaseData {
+    let wall = reader
+        .layout()
+        .metrics
+        .iter()
+        .position(|m| m.name == "wall_time")
+        .expect("a study file has wall_time");
+    let mut case = reader.read_case(row).unwrap();
+    case.metrics[wall] = 0.0;
+    case
+}
+
+/// The largest |a − b| of channel `name` over samples `from..`, relative to the
+/// channel's range in `b` there.
+pub fn channel_difference(
+    a: &studyrun::simulate::CaseOutput,
+    b: &studyrun::simulate::CaseOutput,
+    name: &str,
+    from: usize,
+) -> f64 {
+    let (x, y) = (
+        &a.channel(name).unwrap()[from..],
+        &b.channel(name).unwrap()[from..],
+    );
+    hard::max_relative_difference(x, y, y.len())
+}
+
 /// The Van der Pol oscillator, `μ = 1`: a limit cycle of period ≈ 6.66, not stiff.
 pub struct VanDerPol;
 

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from scipy.stats import qmc
 
+from study_run import studyrun_binary
+
 # Parameter: (min, max) in base units; the ideal mechanism ignores the bearing's,
 # so the design is listed without simulating anything of note.
 RANGES = {
@@ -38,10 +40,7 @@ RANGES = {
 
 @pytest.fixture(scope="module")
 def studyrun():
-    value = os.environ.get("STUDYRUN_BIN")
-    if not value:
-        pytest.skip("STUDYRUN_BIN is not set")
-    return os.path.abspath(value)
+    return studyrun_binary()
 
 
 def unit_design(studyrun, tmp_path, method, samples):

@@ -7,7 +7,6 @@ Environment: STUDYRUN_ENVELOPE_FILE, the result of `studyrun studies/envelope_sm
 neither: skip.
 """
 
-import math
 import os
 import subprocess
 import sys
@@ -20,6 +19,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 from analysis.frequencies import characteristic_frequencies  # noqa: E402
+from study_run import text, window  # noqa: E402
 
 RTOL = 1e-9
 INDICATORS = [
@@ -48,17 +48,6 @@ def path(tmp_path_factory):
 def f(path):
     with h5py.File(path, "r") as h:
         yield h
-
-
-def text(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def window(f):
-    """The analysed samples' indices: ceil(transient fs - 1e-9) <= k < N (model.md §5.3)."""
-    fs, n_all = f.attrs["sample_rate"], f["time"].shape[0]
-    k0 = max(0, math.ceil(f.attrs["transient"] * fs - 1e-9))
-    return slice(min(k0, n_all - 1), n_all - 1)
 
 
 def hann(n):

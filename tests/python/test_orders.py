@@ -8,8 +8,6 @@ Environment: STUDYRUN_BIN (the binary runs a small study written here); else ski
 """
 
 import math
-import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -20,6 +18,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 from analysis.frequencies import characteristic_frequencies  # noqa: E402
+from study_run import run_grid, text, window  # noqa: E402
 
 RTOL = 1e-9
 
@@ -45,26 +44,9 @@ cases:
 
 @pytest.fixture(scope="module")
 def f(tmp_path_factory):
-    binary = os.environ.get("STUDYRUN_BIN")
-    if not binary:
-        pytest.skip("STUDYRUN_BIN is not set")
-    d = tmp_path_factory.mktemp("orders")
-    (d / "orders.yaml").write_text(GRID)
-    out = d / "orders.h5"
-    subprocess.run([binary, str(d / "orders.yaml"), "-o", str(out), "-q"], check=True)
+    out = run_grid(tmp_path_factory.mktemp("orders"), "orders", GRID)
     with h5py.File(out, "r") as h:
         yield h
-
-
-def text(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def window(f):
-    """The analysed samples' indices: ceil(transient fs - 1e-9) <= k < N - 1 (model.md §5.3)."""
-    fs, n_all = f.attrs["sample_rate"], f["time"].shape[0]
-    k0 = max(0, math.ceil(f.attrs["transient"] * fs - 1e-9))
-    return slice(k0, n_all - 1)
 
 
 def amplitude(x):

@@ -7,8 +7,6 @@ series say so naming `output.series`.
 Environment: STUDYRUN_BIN (the binary runs small studies written here); else skip.
 """
 
-import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -21,6 +19,7 @@ sys.path.insert(0, str(REPO))
 
 from analysis.dataset import make_splits  # noqa: E402
 from analysis.studyfile import analysis_window, open_study  # noqa: E402
+from study_run import run_grid  # noqa: E402
 
 GRID = """name: {name}
 duration: 0.05
@@ -40,17 +39,11 @@ VARIANTS = {
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    binary = os.environ.get("STUDYRUN_BIN")
-    if not binary:
-        pytest.skip("STUDYRUN_BIN is not set")
     d = tmp_path_factory.mktemp("output")
-    out = {}
-    for name, output in VARIANTS.items():
-        grid = d / f"{name}.yaml"
-        grid.write_text(GRID.format(name=name, output=output))
-        out[name] = d / f"{name}.h5"
-        subprocess.run([binary, str(grid), "-o", str(out[name]), "-q"], check=True)
-    return out
+    return {
+        name: run_grid(d, name, GRID.format(name=name, output=output))
+        for name, output in VARIANTS.items()
+    }
 
 
 def test_decimated_series_are_the_full_series_at_every_third_sample(files):

@@ -9,14 +9,14 @@ Environment: STUDYRUN_BIN (the binary runs a small study written here); else ski
 """
 
 import math
-import os
-import subprocess
 
 import h5py
 import numpy as np
 import pytest
 from scipy.linalg import expm
 from scipy.signal import lsim
+
+from study_run import run_grid, window
 
 RTOL = 1e-9
 
@@ -40,22 +40,9 @@ SENSORS = [
 
 @pytest.fixture(scope="module")
 def f(tmp_path_factory):
-    binary = os.environ.get("STUDYRUN_BIN")
-    if not binary:
-        pytest.skip("STUDYRUN_BIN is not set")
-    d = tmp_path_factory.mktemp("sensors")
-    (d / "sensors.yaml").write_text(GRID)
-    out = d / "sensors.h5"
-    subprocess.run([binary, str(d / "sensors.yaml"), "-o", str(out), "-q"], check=True)
+    out = run_grid(tmp_path_factory.mktemp("sensors"), "sensors", GRID)
     with h5py.File(out, "r") as h:
         yield h
-
-
-def window(f):
-    """The analysed samples' indices: ceil(transient fs - 1e-9) <= k < N - 1 (model.md §5.3)."""
-    fs, n_all = f.attrs["sample_rate"], f["time"].shape[0]
-    k0 = max(0, math.ceil(f.attrs["transient"] * fs - 1e-9))
-    return slice(k0, n_all - 1)
 
 
 def by_lsim(u, t, fn, zeta):
