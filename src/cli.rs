@@ -320,7 +320,11 @@ fn validate_command(grid: &Path, jobs: Option<u64>, memory_limit: Option<u64>) -
         grid.display(),
         study.cases.len(),
         study.references.len(),
-        study.axes.join(", "),
+        if study.axes.is_empty() {
+            "none".to_string()
+        } else {
+            study.axes.join(", ")
+        },
         study.design.as_ref().map_or(String::new(), |d| format!(
             "; design: {} of {} samples ({} rows) over {}",
             d.method.name(),

@@ -135,6 +135,110 @@ fn a_billion_sample_case_is_refused_at_once_with_the_memory_figure() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("GiB on 1 workers"));
 }
 
+/// The estimate `validate` prints ("memory about 96.7 MiB on …"): as printed, and in
+/// bytes.
+fn printed_estimate(out: &Output) -> (String, f64) {
+    let text = String::from_utf8_lossy(&out.stdout);
+    let after = text.split("memory about ").nth(1).expect("an estimate");
+    let mut words = after.split_whitespace();
+    let value: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap() {
+        "KiB" => 1024f64,
+        "MiB" => 1024f64.powi(2),
+        "GiB" => 1024f64.powi(3),
+        other => panic!("unit {other}"),
+    };
+    (
+        after.split(" on ").next().unwrap().to_string(),
+        value * unit,
+    )
+}
+
+#[test]
+fn the_limit_judges_the_estimate_validate_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper = concat!(env!("CARGO_MANIFEST_DIR"), "/studies/paper.yaml");
+    let out = studyrun(dir.path(), &["validate", paper, "-j", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (shown, estimate) = printed_estimate(&out);
+    // The printed figure has three digits: 1 % either side of it decides.
+    let limit = |factor: f64| format!("{}B", (estimate * factor).round());
+    let above = limit(1.01);
+    let out = studyrun(
+        dir.path(),
+        &["validate", paper, "-j", "2", "--memory-limit", &above],
+    );
+    assert!(out.status.success(), "{above}: {}", stderr(&out));
+    let below = limit(0.99);
+    let out = studyrun(
+        dir.path(),
+        &["validate", paper, "-j", "2", "--memory-limit", &below],
+    );
+    refused(
+        &out,
+        2,
+        &[
+            &format!("needs about {shown} of memory"),
+            "(--memory-limit)",
+        ],
+    );
+}
+
+#[test]
+fn references_of_a_design_and_absurd_speeds_count_against_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    // 3000 sampled speeds: 3000 ideal references of 5001 samples, 1.9 GiB in all.
+    write(
+        dir.path(),
+        "speeds.yaml",
+        "name: speeds\nduration: 1\nsample_rate: 5000\n\
+         design: {method: lhs, samples: 3000, parameters: {rpm: {min: 3000, max: 60000}}}\n",
+    );
+    for args in [
+        &["validate", "speeds.yaml", "--memory-limit", "1GiB"][..],
+        &["speeds.yaml", "--memory-limit", "1GiB"],
+    ] {
+        let (out, took) = timed(dir.path(), args);
+        refused(
+            &out,
+            2,
+            &[
+                "speeds.yaml:3:14",
+                "3000 ideal references",
+                "more than the limit of 1.00 GiB",
+            ],
+        );
+        assert!(took < FAST, "{args:?} took {took:?}");
+    }
+    assert!(!dir.path().join("speeds.h5").exists());
+    // A crank speed with more revolutions than memory holds per-revolution values
+    // for, up to one that overflows every integer count.
+    for rpm in ["1e12", "1e15", "1e300"] {
+        write(
+            dir.path(),
+            "fast.yaml",
+            &format!("name: fast\nduration: 0.02\nsample_rate: 10000\nrpm: {rpm}\ncases: [{{location: crank_ground}}]\n"),
+        );
+        for args in [
+            &["validate", "fast.yaml"][..],
+            &["fast.yaml", "--dry-run"],
+            &["fast.yaml"],
+        ] {
+            let (out, took) = timed(dir.path(), args);
+            refused(
+                &out,
+                2,
+                &[
+                    "`grid`",
+                    "revolutions per case",
+                    "of memory, more than the limit",
+                ],
+            );
+            assert!(took < FAST, "{rpm} {args:?} took {took:?}");
+        }
+    }
+}
+
 #[test]
 fn ten_million_cases_are_refused_before_they_are_expanded() {
     let dir = tempfile::tempdir().unwrap();

@@ -9,12 +9,13 @@ use super::config::{
     BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
     Scalar, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
 };
-use super::memory::{Limits, MemoryEstimate, Shape};
+use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
 use super::{Case, SeriesOutput, Study, StudyError, DEFAULT_MAX_CASES};
 
 mod design;
+mod memory_check;
 mod replicates;
 mod sensors;
 use crate::bearing::stiffness::ContactGeometry;
@@ -455,9 +456,11 @@ struct ResolvedAxis<'a> {
 }
 
 /// Builds the study from grid-file text, refusing it when its run would need more
-/// memory than `limits` allow (decided before the cases are expanded). The steps:
-/// parse, sampling, effects and base case, solver, axes, case count, axis values,
-/// memory, expansion, references, analysed window, spectra and output settings.
+/// memory than `limits` allow ([`memory_check`]: a lower bound before the cases are
+/// expanded and once their speeds are known, the exact estimate at the end). The
+/// steps: parse, sampling, effects and base case, solver, axes, case count, axis
+/// values, memory, expansion, references, analysed window, spectra and output
+/// settings, memory.
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file: GridFile = serde_saphyr::from_str(text).map_err(|e| {
@@ -476,16 +479,15 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let sampled = design::resolve(&ctx, &file, &base, &effects, &axes_names)?;
     let mut resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
     check_repeats(&ctx, &resolved)?;
-    let design_values = sampled.as_ref().map_or(0, |d| d.values());
-    check_study_memory(
-        &ctx,
-        &file,
-        &resolved,
-        &sampling,
-        total,
-        design_values,
-        limits,
-    )?;
+    let places = memory_check::Places::of(&file);
+    let mut known = memory_check::Known {
+        samples: sampling.len() as u64,
+        cases: total,
+        design_values: sampled.as_ref().map_or(0, |d| d.values()),
+        references: 0,
+        revolutions: 0,
+    };
+    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
     if let Some(d) = &sampled {
         resolved.push(d.group());
     }
@@ -522,6 +524,9 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .map(|c| revolution_count(&c.params.drive(), transient, sampling.duration))
         .max()
         .unwrap_or(0);
+    known.references = references.len() as u64;
+    known.revolutions = revolutions as u64;
+    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
     let mut study = Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
@@ -556,6 +561,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         study.sensors = sensors;
     }
     study.output = series_output(&ctx, file.output.as_ref(), &study)?;
+    memory_check::check_study(&ctx, &places, &study, limits)?;
     Ok(study)
 }
 
@@ -610,20 +616,6 @@ fn order_settings(
         spectra: asked(spectra),
         envelope: asked(envelope),
     }))
-}
-
-/// How many order spectra per case the file asks for, from its text alone.
-fn order_spectra_asked(file: &GridFile) -> usize {
-    let spectra = file
-        .spectra
-        .as_ref()
-        .filter(|s| s.orders.as_ref().is_some_and(|o| o.value));
-    let envelope = file
-        .envelope
-        .as_ref()
-        .filter(|e| e.value.orders.as_ref().is_some_and(|o| o.value));
-    spectra.map_or(0, |s| s.channels.as_ref().map_or(3, |c| c.value.len()))
-        + envelope.map_or(0, |e| e.value.channels.value.len())
 }
 
 /// `duration` and `sample_rate`, checked.
@@ -784,94 +776,6 @@ fn resolve_axes<'a>(
                 .collect::<Result<Vec<_>, StudyError>>()
         })
         .collect()
-}
-
-/// The memory check, before anything is expanded: the case count is known, and the
-/// references are at most the combinations of the axes an ideal mechanism depends on.
-fn check_study_memory(
-    ctx: &Ctx<'_>,
-    file: &GridFile,
-    resolved: &[Vec<ResolvedAxis<'_>>],
-    sampling: &Sampling,
-    total: u64,
-    design_values: u64,
-    limits: &Limits,
-) -> Result<(), StudyError> {
-    let references_bound = resolved
-        .iter()
-        .filter(|group| {
-            group.iter().any(|axis| {
-                axis.values
-                    .first()
-                    .is_some_and(|(t, _)| shapes_reference(t.name()))
-            })
-        })
-        .try_fold(1u64, |acc, g| acc.checked_mul(g[0].values.len() as u64))
-        .unwrap_or(u64::MAX)
-        .saturating_add(file.cases.len() as u64)
-        .min(total.max(1));
-    let samples = sampling.len() as u64;
-    let shape = Shape {
-        samples,
-        window: samples,
-        spectra: file
-            .spectra
-            .as_ref()
-            .and_then(|s| s.channels.as_ref())
-            .map_or(3, |c| c.value.len())
-            + file
-                .envelope
-                .as_ref()
-                .map_or(0, |e| 2 * e.value.channels.value.len()),
-        sensor_series: file.sensors.as_ref().map_or(0, |s| 2 * s.value.len()),
-        stored_series: stored_series_bound(file),
-        stored_samples: samples.div_ceil(decimate_bound(file)),
-        order_spectra: order_spectra_asked(file),
-        float32: file
-            .output
-            .as_ref()
-            .and_then(|o| o.dtype.as_ref())
-            .is_some_and(|d| d.value == "float32"),
-        cases: total,
-        references: references_bound,
-        design_values,
-        replicates: file
-            .replicates
-            .as_ref()
-            .map_or(0, |r| r.value.count.value.min(replicates::MAX_REPLICATES)),
-        // Known once the cases' speeds are: counted by `Study::memory_estimate`.
-        revolutions: 0,
-    };
-    check_memory(ctx, file, &MemoryEstimate::of(shape, limits.jobs), limits)
-}
-
-/// The most series a case of `file` may store, before `output.series` is checked:
-/// every channel and sensor series for `all`, none for `none`, else the list's length.
-fn stored_series_bound(file: &GridFile) -> usize {
-    let every = CHANNELS.len() + file.sensors.as_ref().map_or(0, |s| 2 * s.value.len());
-    match file.output.as_ref().and_then(|o| o.series.as_ref()) {
-        Some(S {
-            value: SeriesValue::List(list),
-            ..
-        }) => list.len().min(every),
-        Some(S {
-            value: SeriesValue::Name(n),
-            ..
-        }) if n == "none" => 0,
-        _ => every,
-    }
-}
-
-/// `output.decimate` if it is a whole number of at least 1, else 1 (it is checked
-/// once the study is built).
-fn decimate_bound(file: &GridFile) -> u64 {
-    match file.output.as_ref().and_then(|o| o.decimate.as_ref()) {
-        Some(S {
-            value: Scalar::Num(x),
-            ..
-        }) if *x >= 1.0 && x.fract() == 0.0 && *x < u64::MAX as f64 => *x as u64,
-        _ => 1,
-    }
 }
 
 /// The grid's `count` cases: each is the base with one value of every group (mixed
@@ -1428,14 +1332,6 @@ fn reference_key(p: &CaseParams) -> ReferenceKey {
     )
 }
 
-/// Whether the parameter called `name` changes the ideal mechanism (and so the
-/// references): the speed and the bodies.
-fn shapes_reference(name: &str) -> bool {
-    lookup(name).is_some_and(|p| {
-        p.name == "rpm" || p.field.starts_with("speed.") || p.field.starts_with("mechanism.")
-    })
-}
-
 /// Refuses a value an axis already has (a grid axis), or a row a zip group already
 /// has: the same cases would run twice.
 fn check_repeats(ctx: &Ctx<'_>, groups: &[Vec<ResolvedAxis<'_>>]) -> Result<(), StudyError> {
@@ -1478,51 +1374,6 @@ fn check_repeats(ctx: &Ctx<'_>, groups: &[Vec<ResolvedAxis<'_>>]) -> Result<(), 
         }
     }
     Ok(())
-}
-
-/// Refuses a study whose run would need more memory than `limits.memory`, naming the
-/// estimate, its parts, the limit and what lowers it.
-fn check_memory(
-    ctx: &Ctx<'_>,
-    file: &GridFile,
-    estimate: &MemoryEstimate,
-    limits: &Limits,
-) -> Result<(), StudyError> {
-    if estimate.total <= limits.memory as f64 {
-        return Ok(());
-    }
-    let (place, field, remedy) = if estimate.dominated_by_samples() {
-        (
-            Some(at(&file.sample_rate.referenced)),
-            "sample_rate",
-            format!(
-                "a lower sample_rate or a shorter duration ({} samples per case now), \
-                 `output: {{dtype: float32}}` (halves the encoded records), fewer \
-                 `spectra: channels`, or fewer workers (-j)",
-                estimate.shape.samples
-            ),
-        )
-    } else {
-        (
-            file.max_cases.as_ref().map(|m| at(&m.referenced)),
-            "grid",
-            format!(
-                "fewer cases ({} now: fewer axis values); shards do not help, since every \
-                 shard holds the whole case table",
-                estimate.shape.cases
-            ),
-        )
-    };
-    Err(ctx.err(
-        place,
-        field,
-        format!(
-            "the study needs about {} of memory, more than the limit of {}: {}. To need less: {remedy}",
-            super::memory::bytes(estimate.total),
-            limits.describe(),
-            estimate
-        ),
-    ))
 }
 
 /// The study name gives the default output file `<name>.h5` in the working directory:

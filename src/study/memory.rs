@@ -50,19 +50,20 @@ pub fn available_cores() -> usize {
 
 /// Values the writer holds per case for `replicates` runs per case (0: none): each
 /// replicated metric per replicate, its mean, deviation and interval, the horizon
-/// and the chaotic flag.
-fn replicate_values(replicates: u64) -> u64 {
+/// and the chaotic flag. In floating point, as every count here: a count from an
+/// absurd input (10^300 rpm) must give an absurd estimate, not overflow.
+fn replicate_values(replicates: u64) -> f64 {
     if replicates == 0 {
-        return 0;
+        return 0.0;
     }
-    let metrics = crate::signal::replicates::replicated_metrics().len() as u64;
-    replicates * metrics + 3 * metrics + 2
+    let metrics = crate::signal::replicates::replicated_metrics().len() as f64;
+    replicates as f64 * metrics + 3.0 * metrics + 2.0
 }
 
 /// Values the writer holds per case for `revolutions` revolutions: each
 /// per-revolution metric per revolution.
-fn revolution_values(revolutions: u64) -> u64 {
-    revolutions * crate::signal::revolutions::revolution_metric_specs().len() as u64
+fn revolution_values(revolutions: u64) -> f64 {
+    revolutions as f64 * crate::signal::revolutions::revolution_metric_specs().len() as f64
 }
 
 /// Bytes one case takes in the case table of a run: its parameters (with the
@@ -110,6 +111,18 @@ pub struct Shape {
     /// Order spectra per case (docs/model.md §7.9), `window / 2 + 1` values each,
     /// held with the case table like the per-revolution values.
     pub order_spectra: usize,
+}
+
+impl Shape {
+    /// Bytes one case takes in the run's case table: its parameters and bookkeeping
+    /// ([`case_table_bytes`]), its replicate and per-revolution values and its order
+    /// spectra.
+    pub fn case_bytes(&self) -> f64 {
+        let n_f = (self.window / 2 + 1) as f64;
+        case_table_bytes()
+            + (replicate_values(self.replicates) + revolution_values(self.revolutions)) * 8.0
+            + self.order_spectra as f64 * n_f * 8.0
+    }
 }
 
 /// The memory a run of a study needs at its peak, by part (bytes).
@@ -168,12 +181,7 @@ impl MemoryEstimate {
         let queued = (2.0 * jobs_f + 1.0) * record;
         // The references have the simulated channels only.
         let references = shape.references as f64 * (simulated + 1.0) * n * 8.0;
-        let case_table = shape.cases as f64
-            * (case_table_bytes()
-                + (replicate_values(shape.replicates) + revolution_values(shape.revolutions))
-                    as f64
-                    * 8.0
-                + shape.order_spectra as f64 * n_f * 8.0)
+        let case_table = shape.cases as f64 * shape.case_bytes()
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_s + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
@@ -190,10 +198,61 @@ impl MemoryEstimate {
         }
     }
 
-    /// Whether the per-case parts (workers, queue, references) outweigh the case table:
-    /// then the sampling is what to lower, else the number of cases.
-    pub fn dominated_by_samples(&self) -> bool {
-        self.jobs as f64 * self.per_case + self.queued + self.references > self.case_table
+    /// The parts of a lower bound ([`Shape`] with only the samples, cases, design
+    /// values, references and revolutions known), e.g. `2 workers x 9.8 GiB for one
+    /// case's 1000001 samples x 15 channels as float64, …`.
+    pub fn lower_bound_parts(&self) -> String {
+        let s = &self.shape;
+        format!(
+            "{} worker{} x {} for one case's {} samples x {} channels as float64, \
+             {} reference{} x {}, case table {} cases x {} = {} ({} revolutions per \
+             case), fixed {}",
+            self.jobs,
+            if self.jobs == 1 { "" } else { "s" },
+            bytes(self.per_case),
+            s.samples,
+            CHANNELS.len(),
+            s.references,
+            if s.references == 1 { "" } else { "s" },
+            bytes(self.references / (s.references.max(1) as f64)),
+            s.cases,
+            bytes(s.case_bytes()),
+            bytes(self.case_table),
+            count(s.revolutions),
+            bytes(self.fixed),
+        )
+    }
+
+    /// The part that weighs most, and so what to lower.
+    pub fn largest(&self) -> Largest {
+        let workers = self.jobs as f64 * self.per_case + self.queued;
+        if self.case_table >= workers.max(self.references) {
+            Largest::CaseTable
+        } else if self.references > workers {
+            Largest::References
+        } else {
+            Largest::Samples
+        }
+    }
+}
+
+/// The largest part of a [`MemoryEstimate`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Largest {
+    /// The cases in the workers and the records queued: lower the samples per case.
+    Samples,
+    /// The ideal references held for the whole run: fewer distinct speeds and bodies.
+    References,
+    /// The case table: fewer cases, or fewer values per case.
+    CaseTable,
+}
+
+/// `n` as written, or in powers of ten above 10^12 (`1.8e19`).
+fn count(n: u64) -> String {
+    if n < 1_000_000_000_000 {
+        n.to_string()
+    } else {
+        format!("{:.1e}", n as f64)
     }
 }
 
@@ -225,7 +284,7 @@ impl fmt::Display for MemoryEstimate {
                 self.references / s.references as f64
             }),
             s.cases,
-            case_table_bytes(),
+            s.case_bytes(),
             bytes(self.case_table),
             bytes(self.fixed),
         )
@@ -364,7 +423,8 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
     Ok(size as u64)
 }
 
-/// `bytes` for people: `14.3 GiB`, `512 MiB`, `800 B`.
+/// `bytes` for people: `14.3 GiB`, `512 MiB`, `800 B`; beyond 1024 PiB in powers of
+/// ten (`3.2e21 B`), so that an absurd estimate stays one short word.
 pub fn bytes(bytes: f64) -> String {
     const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
     let mut v = bytes;
@@ -373,7 +433,9 @@ pub fn bytes(bytes: f64) -> String {
         v /= 1024.0;
         u += 1;
     }
-    if u == 0 {
+    if v >= 1024.0 {
+        format!("{bytes:.1e} B")
+    } else if u == 0 {
         format!("{v:.0} B")
     } else if v < 10.0 {
         format!("{v:.2} {}", UNITS[u])
@@ -518,7 +580,7 @@ mod tests {
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
         assert!(e.total > 3.0 * 104e9, "{}", e.total);
-        assert!(e.dominated_by_samples());
+        assert_eq!(e.largest(), Largest::Samples);
         let small = MemoryEstimate::of(
             Shape {
                 samples: 2_501,
@@ -537,7 +599,7 @@ mod tests {
             },
             2,
         );
-        assert!(!small.dominated_by_samples());
+        assert_eq!(small.largest(), Largest::CaseTable);
         assert!(small.case_table > 10_000_000.0 * 400.0);
     }
 
@@ -593,5 +655,7 @@ mod tests {
         assert_eq!(bytes(800.0), "800 B");
         assert_eq!(bytes(1536.0), "1.50 KiB");
         assert_eq!(bytes(14.3 * (1u64 << 30) as f64), "14.3 GiB");
+        assert_eq!(bytes(3.2e21), "3.2e21 B");
+        assert_eq!(bytes(f64::INFINITY), "inf B");
     }
 }

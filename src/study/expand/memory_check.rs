@@ -1,0 +1,158 @@
+//! The memory check of a study: refused when its run would need more memory than the
+//! limits allow, decided before anything large is allocated.
+//!
+//! The check runs three times while a study is built, each on what is known by then:
+//! before the cases are expanded (the samples per case, the case count and the design
+//! values), once the cases' speeds give the per-revolution values and the references are
+//! assigned, and on the finished study. The first two use a lower bound of the run's
+//! needs (what is not known yet counts as nothing), so they refuse only studies the last,
+//! exact check ([`Study::memory_estimate`], the figure `validate` and `--dry-run`
+//! print) would refuse too.
+
+use super::{at, Ctx};
+use crate::study::config::GridFile;
+use crate::study::memory::{bytes, Largest, Limits, MemoryEstimate, Shape};
+use crate::study::{Study, StudyError};
+
+/// Where the two remedies of a refusal point in the grid file: `sample_rate` (the
+/// samples per case) and `max_cases` (the case count), as (line, column).
+pub(super) struct Places {
+    sample_rate: (u64, u64),
+    max_cases: Option<(u64, u64)>,
+}
+
+impl Places {
+    /// The places in `file`.
+    pub(super) fn of(file: &GridFile) -> Self {
+        Self {
+            sample_rate: at(&file.sample_rate.referenced),
+            max_cases: file.max_cases.as_ref().map(|m| at(&m.referenced)),
+        }
+    }
+}
+
+/// What is known of a study before it is finished, for the lower-bound checks.
+pub(super) struct Known {
+    /// Samples per case.
+    pub samples: u64,
+    /// Cases in the study.
+    pub cases: u64,
+    /// Values a sampled design holds while the study is expanded.
+    pub design_values: u64,
+    /// Ideal references (0 before they are assigned).
+    pub references: u64,
+    /// Most whole revolutions of a case (0 before the speeds are known).
+    pub revolutions: u64,
+}
+
+/// Refuses the study when even the lower bound of its run's memory from `known`
+/// exceeds `limits`: one case's simulated channels per worker, the references, the
+/// case table with its per-revolution values and the design values; no spectra, no
+/// stored series, no sensors.
+pub(super) fn check_lower_bound(
+    ctx: &Ctx<'_>,
+    places: &Places,
+    known: &Known,
+    limits: &Limits,
+) -> Result<(), StudyError> {
+    let shape = Shape {
+        samples: known.samples,
+        window: 0,
+        spectra: 0,
+        sensor_series: 0,
+        stored_series: 0,
+        stored_samples: 0,
+        float32: true,
+        cases: known.cases,
+        references: known.references,
+        design_values: known.design_values,
+        replicates: 0,
+        revolutions: known.revolutions,
+        order_spectra: 0,
+    };
+    check(
+        ctx,
+        places,
+        &MemoryEstimate::of(shape, limits.jobs),
+        limits,
+        true,
+    )
+}
+
+/// Refuses the finished `study` when its run's memory estimate exceeds `limits`.
+pub(super) fn check_study(
+    ctx: &Ctx<'_>,
+    places: &Places,
+    study: &Study,
+    limits: &Limits,
+) -> Result<(), StudyError> {
+    check(
+        ctx,
+        places,
+        &study.memory_estimate(limits.jobs),
+        limits,
+        false,
+    )
+}
+
+/// Refuses an `estimate` (a lower bound when `lower_bound`) above `limits.memory`,
+/// naming the estimate, its parts, the limit and what lowers it.
+fn check(
+    ctx: &Ctx<'_>,
+    places: &Places,
+    estimate: &MemoryEstimate,
+    limits: &Limits,
+    lower_bound: bool,
+) -> Result<(), StudyError> {
+    if estimate.total <= limits.memory as f64 {
+        return Ok(());
+    }
+    let shape = &estimate.shape;
+    let (place, field, remedy) = match estimate.largest() {
+        Largest::Samples => (
+            Some(places.sample_rate),
+            "sample_rate",
+            format!(
+                "a lower sample_rate or a shorter duration ({} samples per case now), \
+                 `output: {{dtype: float32}}` (halves the encoded records), fewer \
+                 `spectra: channels`, or fewer workers (-j)",
+                shape.samples
+            ),
+        ),
+        Largest::References => (
+            Some(places.sample_rate),
+            "sample_rate",
+            format!(
+                "fewer distinct speeds and mechanism bodies ({} ideal references now, each \
+                 held for the whole run), or a lower sample_rate or a shorter duration \
+                 ({} samples per case now)",
+                shape.references, shape.samples
+            ),
+        ),
+        Largest::CaseTable => (
+            places.max_cases,
+            "grid",
+            format!(
+                "fewer cases ({} now: fewer axis values), or fewer revolutions per case \
+                 (a lower speed or a shorter duration); shards do not help, since every \
+                 shard holds the whole case table",
+                shape.cases
+            ),
+        ),
+    };
+    let (needs, parts) = if lower_bound {
+        ("at least", estimate.lower_bound_parts())
+    } else {
+        ("about", estimate.to_string())
+    };
+    Err(ctx.err(
+        place,
+        field,
+        format!(
+            "the study needs {needs} {} of memory, more than the limit of {}: {parts}. \
+             To need less: {remedy}",
+            bytes(estimate.total),
+            limits.describe(),
+        ),
+    ))
+}
