@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.frequencies import race_speeds
-from analysis.studyfile import amplitude_spectrum, analysis_window
+from analysis.studyfile import amplitude_spectrum, analysis_window, constant_rpm, parameter_value, text
 
 FAULT_LINES = ("FTF", "BPFO", "BPFI", "BSF", "2·BSF")
 """The characteristic lines marked in envelope spectra (docs/model.md §7.3)."""
@@ -24,31 +24,6 @@ FAULT_LINE = {"outer": "BPFO", "inner": "BPFI", "ball": "2·BSF"}
 
 KURTOGRAM_MAX_LEVEL = 6
 """Deepest binary level of the fast kurtogram (docs/model.md §7.6)."""
-
-
-def text(value):
-    """A string parameter's value as str (the file stores variable-length UTF-8)."""
-    return value.decode() if isinstance(value, bytes) else str(value)
-
-
-def _parameter(ds, name, case):
-    """The float value of parameter `name` of `case`, NaN if the file lacks it."""
-    return float(ds[name].values[case]) if name in ds else math.nan
-
-
-def constant_rpm(ds, case):
-    """The crank speed (rpm) of a constant-speed case, NaN for a speed that varies:
-    `rpm`, or a ramp whose `speed_from` equals `speed_to`, or a sine of amplitude 0
-    (each runs as the constant drive, docs/model.md §1.5)."""
-    rpm = _parameter(ds, "rpm", case)
-    if math.isfinite(rpm):
-        return rpm
-    profile = text(ds["speed_profile"].values[case]) if "speed_profile" in ds else "constant"
-    if profile == "ramp" and _parameter(ds, "speed_from", case) == _parameter(ds, "speed_to", case):
-        return _parameter(ds, "speed_from", case)
-    if profile == "sine" and _parameter(ds, "speed_amplitude", case) == 0.0:
-        return _parameter(ds, "speed_mean", case)
-    return math.nan
 
 
 def crank_motion(ds, case, t):
@@ -62,15 +37,15 @@ def crank_motion(ds, case, t):
     profile = text(ds["speed_profile"].values[case])
     to_rad = 2 * math.pi / 60
     if profile == "ramp":
-        w0, w1 = _parameter(ds, "speed_from", case), _parameter(ds, "speed_to", case)
-        over = _parameter(ds, "speed_over", case)
+        w0, w1 = parameter_value(ds, "speed_from", case), parameter_value(ds, "speed_to", case)
+        over = parameter_value(ds, "speed_over", case)
         rate = (w1 - w0) / over
         tau = np.minimum(t, over)
         theta = w0 * tau + 0.5 * rate * tau**2 + w1 * np.maximum(t - over, 0.0)
         return to_rad * theta, w0 + rate * tau
     if profile == "sine":
-        wm, wa = _parameter(ds, "speed_mean", case), _parameter(ds, "speed_amplitude", case)
-        nu = 2 * math.pi * _parameter(ds, "speed_frequency", case)
+        wm, wa = parameter_value(ds, "speed_mean", case), parameter_value(ds, "speed_amplitude", case)
+        nu = 2 * math.pi * parameter_value(ds, "speed_frequency", case)
         theta = wm * t + 2 * wa / nu * np.sin(0.5 * nu * t) ** 2
         return to_rad * theta, wm + wa * np.sin(nu * t)
     raise ValueError(f"case {int(ds['case'].values[case])}: no closed-form crank angle for "
@@ -97,9 +72,9 @@ def fault_orders(ds, case):
     ball count and raceway diameters (docs/model.md §7.3: the mean race speeds at
     1 rev/s). Raises ValueError for an `ideal` case (no bearing)."""
     omega_i, omega_o = race_speeds(text(ds["location"].values[case]), 60.0)
-    d_i = _parameter(ds, "inner_race_diameter", case)
-    d_o = _parameter(ds, "outer_race_diameter", case)
-    balls = _parameter(ds, "ball_count", case)
+    d_i = parameter_value(ds, "inner_race_diameter", case)
+    d_o = parameter_value(ds, "outer_race_diameter", case)
+    balls = parameter_value(ds, "ball_count", case)
     omega_m = (omega_i * d_i + omega_o * d_o) / (d_i + d_o)
     ball, pitch = 0.5 * (d_o - d_i), 0.5 * (d_i + d_o)
     f_r = abs(omega_i - omega_o) / (2 * math.pi)

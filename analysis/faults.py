@@ -18,7 +18,6 @@ at the same location. Prints a Markdown table and writes one figure of the spect
 import argparse
 import math
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -26,6 +25,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from analysis.frequencies import race_speeds  # noqa: E402
+from analysis.studyfile import BEARING_LOCATIONS, constant_rpm, open_study, study_file_or_exit, text  # noqa: E402
 
 CHANNEL = "bearing_force"
 RACES = ("outer", "inner", "ball")
@@ -46,35 +46,44 @@ def pass_frequency(race, location, rpm, balls, d_i, d_o):
 
 
 def read(path):
-    """The constant-speed cases of a fault study file as a list of dicts, with spectra
-    (a run-up's lines sweep with the speed: those cases have `rpm` NaN and are left out)."""
-    with h5py.File(path, "r") as f:
-        text = lambda name: [v.decode() for v in f[name][:]]  # noqa: E731
-        freq = f["frequency"][:]
-        spectra = f[f"{CHANNEL}_spectrum"][:]
+    """The constant-speed bearing cases of a fault study file as a list of dicts, with
+    spectra. A speed profile that runs as a constant speed (a ramp from a speed to the
+    same speed, docs/model.md §1.5) counts as that speed (`studyfile.constant_rpm`); a
+    run-up's lines sweep with the speed, and `ideal` cases have no bearing: both are
+    left out. Raises ValueError if the file lacks the fault labels or the bearing force
+    spectrum, or has no constant-speed bearing case with a defect."""
+    with open_study(path) as ds:
+        needed = ["fault", "defect_race", f"{CHANNEL}_spectrum"]
+        missing = [name for name in needed if name not in ds]
+        if missing:
+            raise ValueError(f"{path}: no {', '.join(missing)}: expected a file of studies/faults.yaml "
+                             f"(a study with defects whose `spectra.channels` include {CHANNEL})")
+        freq = ds["frequency"].values
         cases = []
-        for k, (loc, fault, race) in enumerate(zip(text("location"), text("fault"), text("defect_race"))):
-            rpm = float(f["rpm"][k])
-            if not np.isfinite(rpm) and "speed_from" in f and f["speed_from"][k] == f["speed_to"][k]:
-                rpm = float(f["speed_from"][k])  # a ramp that stays at one speed
-            if not np.isfinite(rpm):
+        for k in range(ds.sizes["case"]):
+            rpm = constant_rpm(ds, k)
+            location = text(ds["location"].values[k])
+            if location not in BEARING_LOCATIONS or not np.isfinite(rpm) or int(ds["status"].values[k]) != 1:
                 continue
             cases.append(
                 {
-                    "location": loc,
-                    "fault": fault,
-                    "race": race,
-                    "width": float(f["defect_width"][k]),
-                    "depth": float(f["defect_depth"][k]),
+                    "location": location,
+                    "fault": text(ds["fault"].values[k]),
+                    "race": text(ds["defect_race"].values[k]),
+                    "width": float(ds["defect_width"].values[k]),
+                    "depth": float(ds["defect_depth"].values[k]),
                     "rpm": rpm,
-                    "balls": int(f["ball_count"][k]),
-                    "d_i": float(f["inner_race_diameter"][k]),
-                    "d_o": float(f["outer_race_diameter"][k]),
-                    "wall": float(f["wall_time"][k]),
-                    "spectrum": spectra[k],
+                    "balls": int(ds["ball_count"].values[k]),
+                    "d_i": float(ds["inner_race_diameter"].values[k]),
+                    "d_o": float(ds["outer_race_diameter"].values[k]),
+                    "wall": float(ds["wall_time"].values[k]),
+                    "spectrum": ds[f"{CHANNEL}_spectrum"].values[k],
                 }
             )
-        return freq, cases
+    if not any(c["fault"] != "none" for c in cases):
+        raise ValueError(f"{path}: no successful constant-speed bearing case with a defect (every such case has "
+                         "fault none): expected a file of studies/faults.yaml")
+    return freq, cases
 
 
 def amplitude_near(freq, spectrum, f0):
@@ -145,7 +154,11 @@ def main(argv=None):
     p.add_argument("file", help="a result file of studies/faults.yaml")
     p.add_argument("--figure", help="write the spectra figure here (PNG)")
     a = p.parse_args(argv)
-    freq, cases = read(a.file)
+    study_file_or_exit("faults", a.file)
+    try:
+        freq, cases = read(a.file)
+    except ValueError as e:
+        raise SystemExit(f"faults: {e}") from None
     print(table(freq, cases))
     print(f"\ncases: {len(cases)}, wall time per case: " + ", ".join(f"{c['wall']:.2f}" for c in cases) + " s")
     if a.figure:

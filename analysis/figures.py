@@ -24,6 +24,7 @@ from analysis.studyfile import (  # noqa: E402
     analysis_window,
     reference_for,
     select_cases,
+    spectrum_window,
     unstack,
 )
 
@@ -209,11 +210,24 @@ def _default_fmax(marks, nyquist):
     return min(nyquist, 50.0 * math.ceil(20 * highest / 50.0))
 
 
+def ideal_spectra(ds, rows, channel):
+    """(frequencies in Hz, amplitudes [len(rows), frequency]) of the ideal mechanism's
+    `channel` for the cases at positions `rows`: its series over the analysed window
+    transformed with the file's spectrum window (`spectrum_window`), as studyrun
+    computes the stored `<channel>_spectrum` of a case."""
+    sample_rate = float(ds.attrs["sample_rate"])
+    window = spectrum_window(ds)
+    series = reference_for(ds.isel(case=list(rows)), [channel])[channel].values[:, analysis_window(ds)]
+    freq = np.fft.rfftfreq(series.shape[1], 1.0 / sample_rate)
+    return freq, np.array([amplitude_spectrum(y, sample_rate, window)[1] for y in series]).reshape(-1, freq.size)
+
+
 def spectra(
     ds, location, rpm, waviness_amplitude, channel, out, fmax=None, select=None, ball_counts=None, dpi=90
 ):
     """Amplitude spectra of `channel` (stored `<channel>_spectrum`, transient ≤ t < duration,
-    Hann window) per ball count, the ideal mechanism's spectrum in grey, and the
+    the file's window `spectrum_window`) per ball count, the ideal mechanism's spectrum
+    (the same window) in grey, and the
     characteristic frequencies of docs/model.md §7.3 marked (see analysis.frequencies):
     cage f_c, ball pass N_b f_out and N_b f_in, waviness N_o f_out and N_i f_in.
     Both axes are logarithmic (frequency from the first bin above 0 Hz).
@@ -234,13 +248,12 @@ def spectra(
     freq = ds["frequency"].values
     shown = (freq > 0) & (freq <= fmax)
     amplitudes = ds[f"{channel}_spectrum"].isel(case=rows).values[:, shown]
-    ideal = reference_for(ds.isel(case=rows), [channel])[channel].values[:, analysis_window(ds)]
+    f_ideal, ideal = ideal_spectra(ds, rows, channel)
+    ideal_shown = (f_ideal > 0) & (f_ideal <= fmax)
 
     fig, axes = plt.subplots(len(rows), 1, sharex=True, sharey=True, squeeze=False,
                              figsize=(10, 1.9 * len(rows) + 1.4))
-    for ax, (n, row), amplitude, y_ideal in zip(axes[:, 0], by_count.items(), amplitudes, ideal):
-        f_ideal, a_ideal = amplitude_spectrum(y_ideal, sample_rate)
-        ideal_shown = (f_ideal > 0) & (f_ideal <= fmax)
+    for ax, (n, row), amplitude, a_ideal in zip(axes[:, 0], by_count.items(), amplitudes, ideal):
         ax.loglog(freq[shown], amplitude, lw=0.9, color="C0", label=f"with bearing, N_b = {n}")
         ax.loglog(f_ideal[ideal_shown], a_ideal[ideal_shown], lw=0.8, color="0.55", label="ideal mechanism")
         for i, (label, f, style) in enumerate(marks[row]):

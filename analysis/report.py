@@ -12,6 +12,17 @@ spectrogram, a waterfall over the crank speed, order spectra of run-ups, the fas
 kurtogram and heatmaps of the condition indicators. What a study cannot show (no
 bearing cases, no grid axis that varies, cases not told apart by the grid, no
 `envelope:`, no varying speed) is skipped and said so in the index.
+
+A case whose speed profile runs as a constant speed (a ramp from a speed to the same
+speed, a sine of amplitude 0: docs/model.md §1.5) is shown at that speed, with its
+panels and spectra. A bearing without a defect (`fault` none, or a zero-depth defect)
+is shown as healthy: `defect_race` none and its other defect parameters not
+applicable; the metrics views put it in the `none` row beside the defects of every
+defect width (angle, depth) and the diagnosis figures in every condition it shares
+with them.
+
+A missing or non-HDF5 file, or a `--select` that is malformed or matches no case,
+ends the program with a one-line message.
 """
 
 import argparse
@@ -25,7 +36,13 @@ import numpy as np  # noqa: E402
 
 from analysis import diagnosis, figures  # noqa: E402
 from analysis import diagnosis_figures as dfig  # noqa: E402
-from analysis.studyfile import grid_axes, open_study, select_cases  # noqa: E402
+from analysis.studyfile import (  # noqa: E402
+    constant_rpm,
+    grid_axes,
+    open_study,
+    select_cases,
+    study_file_or_exit,
+)
 
 METRIC_KINDS = ("rms_deviation", "peak_deviation")
 SPEED_KEYS = ("rpm", "speed_from", "speed_to", "speed_over", "speed_mean", "speed_amplitude", "speed_frequency")
@@ -35,6 +52,9 @@ INDICATORS = ("rms", "peak", "crest_factor", "kurtosis", "skewness", "impulse_fa
               "envelope_energy_bpfi", "envelope_energy_2bsf")
 """Per-channel condition indicators of an `envelope:` study (docs/model.md §7.7)."""
 GROUP_KEYS = ("location", "rpm", "waviness_amplitude")
+DEFECT_PARAMETERS = ("defect_race", "defect_angle", "defect_width", "defect_depth")
+"""The first defect's parameters (docs/result-file.md): not applicable to a bearing without one."""
+HEALTHY = "none"
 
 
 class Index:
@@ -60,23 +80,127 @@ class Index:
         path.write_text("\n".join(self.lines), encoding="utf-8")
 
 
-def parse_value(text):
-    """A command-line parameter value: a number (file units) if it parses as one, else the string."""
+def _values_text(ds, name, cases=None):
+    """The distinct values of per-case variable `name` (among `cases`), for a message."""
+    values = ds[name].values if cases is None else ds[name].values[cases]
+    if values.dtype.kind in "USO":
+        shown = sorted({diagnosis.text(v) for v in values})
+    else:
+        shown = [f"{v:g}" for v in np.unique(values.astype(float))]
+    return ", ".join(shown[:20]) + (", ..." if len(shown) > 20 else "") if shown else "(no case)"
+
+
+def parse_selection(ds, item):
+    """(NAME, value) of a `--select NAME=VALUE`: VALUE as text for a string variable,
+    else a plain number in the file's unit. Raises ValueError saying what is allowed."""
+    name, sep, value = item.partition("=")
+    name, value = name.strip(), value.strip()
+    if not sep or not name or name not in ds or ds[name].dims != ("case",):
+        axes = ", ".join(["location"] + [a for a in grid_axes(ds) if a != "location"])
+        raise ValueError(f"--select {item!r}: expected NAME=VALUE with NAME a case parameter "
+                         f"(e.g. {axes})")
+    if ds[name].dtype.kind in "USO":
+        return name, value
     try:
-        return float(text)
+        return name, float(value)
     except ValueError:
-        return text
+        units = ds[name].attrs.get("units", "1")
+        raise ValueError(f"--select {item!r}: {name} takes a plain number in the file's unit {units} "
+                         f"(units are not parsed); the file has {_values_text(ds, name)}") from None
 
 
 def restrict(ds, selections):
-    """The cases matching NAME=VALUE selections (file units), as a Dataset."""
-    params = {}
-    for item in selections:
-        name, sep, value = item.partition("=")
-        if not sep or name not in ds:
-            raise SystemExit(f"--select {item!r}: expected NAME=VALUE with NAME a case parameter")
-        params[name] = parse_value(value)
-    return ds.isel(case=select_cases(ds, **params)) if params else ds
+    """The cases matching NAME=VALUE selections (file units), as a Dataset. Raises
+    ValueError for a malformed selection and for selections no case matches, naming
+    the values the file has."""
+    params = dict(parse_selection(ds, item) for item in selections)
+    if not params:
+        return ds
+    cases = select_cases(ds, **params)
+    if cases.size == 0:
+        for name, value in params.items():
+            if select_cases(ds, **{name: value}).size == 0:
+                shown = value if isinstance(value, str) else f"{value:g}"
+                raise ValueError(f"--select {name}={shown}: no case has {name} {shown}; "
+                                 f"the file has {_values_text(ds, name)}")
+        raise ValueError(f"--select {' '.join(selections)}: no case matches them all; among the cases "
+                         "each of the others selects, " + "; ".join(
+                             f"{name} is {_values_text(ds, name, select_cases(ds, **{k: v for k, v in params.items() if k != name}))}"
+                             for name in params))
+    return ds.isel(case=cases)
+
+
+def no_defect(ds):
+    """Boolean per case: the bearing has no defect. Its `fault` label is `none` where
+    the file has the label, else its `defect_depth` is 0 (a zero-depth defect is no
+    defect, docs/grid-file.md); without either variable, no case has a defect."""
+    if "fault" in ds:
+        return np.array([diagnosis.text(v) == HEALTHY for v in ds["fault"].values], dtype=bool)
+    if "defect_depth" in ds:
+        return ds["defect_depth"].values == 0
+    return np.ones(ds.sizes["case"], dtype=bool)
+
+
+def mark_healthy(ds):
+    """`ds` with the defect parameters of the cases without a defect (`no_defect`)
+    marked not applicable: `defect_race` `none`, the numeric ones NaN (shown as n/a).
+    A grid with a defect axis gives its healthy cases (e.g. `cases:` with
+    `defect_depth: 0`) the race, angle and width of a zero-depth defect, which
+    describe nothing."""
+    healthy = no_defect(ds)
+    if not healthy.any():
+        return ds
+    changed = {}
+    for name in DEFECT_PARAMETERS:
+        if name not in ds or ds[name].dims != ("case",):
+            continue
+        values = ds[name].values.copy()
+        if values.dtype.kind in "USO":
+            values = values.astype(object)
+            values[healthy] = HEALTHY
+        else:
+            values = values.astype(float)
+            values[healthy] = np.nan
+        changed[name] = ds[name].copy(data=values)
+    return ds.assign(changed)
+
+
+def with_constant_rpm(ds):
+    """`ds` with `rpm` set for the cases whose speed profile runs as a constant speed
+    (`studyfile.constant_rpm`: a ramp from a speed to the same speed, a sine of
+    amplitude 0), so that they are selected and drawn at that speed like a constant
+    `rpm`; speeds that vary keep `rpm` NaN."""
+    rpm = np.array([constant_rpm(ds, case) for case in range(ds.sizes["case"])], dtype=float)
+    return ds.assign(rpm=ds["rpm"].copy(data=rpm))
+
+
+def healthy_beside_defects(ds):
+    """For the metrics views: the flat `ds` (after `mark_healthy`) with each case
+    without a defect repeated at every combination of the numeric defect grid axes
+    (`defect_width`, `defect_angle`, `defect_depth`) that the cases with a defect
+    have, so that it fills the `defect_race` `none` row of each of their facets (its
+    own NaN cannot be a grid coordinate). Healthy copies that coincide on every grid
+    axis are kept once. Returns (the Dataset, the count of healthy cases left out)."""
+    axes = grid_axes(ds)
+    numeric = [a for a in axes if a in DEFECT_PARAMETERS and a != "defect_race" and a in ds]
+    healthy = no_defect(ds)
+    if not numeric or healthy.all() or not healthy.any():
+        return ds, 0
+    sick, well = np.flatnonzero(~healthy), np.flatnonzero(healthy)
+    combos = list(dict.fromkeys(zip(*(ds[a].values[sick].tolist() for a in numeric))))
+    rows = np.concatenate([sick] + [well] * len(combos))
+    out = ds.isel(case=rows)
+    for j, name in enumerate(numeric):
+        values = out[name].values.astype(float).copy()
+        values[len(sick):] = np.repeat([combo[j] for combo in combos], len(well))
+        out = out.assign({name: out[name].copy(data=values)})
+    keep, seen, shown = list(range(len(sick))), set(), set()
+    for k, key in enumerate(zip(*(out[a].values.tolist() for a in axes))):
+        if k >= len(sick) and key not in seen:
+            seen.add(key)
+            keep.append(k)
+            shown.add(int(rows[k]))
+    return out.isel(case=keep), len(well) - len(shown)
 
 
 def bearing_cases(ds):
@@ -109,8 +233,10 @@ def panel_groups(ds, cases):
         for key in keys:
             value = ds[key].values[case]
             params[key] = str(value) if ds[key].dtype.kind in "USO" else float(value)
-        groups.setdefault(tuple(params.items()), set()).add(int(ds["ball_count"].values[case]))
-    return [(dict(key), sorted(counts)) for key, counts in groups.items()]
+        # NaN (a parameter not applicable, or differing per race) groups with NaN.
+        same = tuple((k, "nan" if isinstance(v, float) and np.isnan(v) else v) for k, v in params.items())
+        groups.setdefault(same, (params, set()))[1].add(int(ds["ball_count"].values[case]))
+    return [(params, sorted(counts)) for params, counts in groups.values()]
 
 
 def slug(ds, params):
@@ -122,12 +248,16 @@ def slug(ds, params):
 def render_metrics(ds, cases, outdir, index, dpi):
     """The metrics views of the bearing cases into `outdir`, listed in `index`."""
     index.section("Vibration metrics (docs/model.md §6)")
-    axes = varying_axes(ds, cases)
+    metrics = [f"{channel}_{kind}" for channel in figures.PANEL_CHANNELS for kind in METRIC_KINDS]
+    needed = [n for n in grid_axes(ds) + ["status", "fault", "defect_depth"] + metrics if n in ds]
+    bearing, repeated = healthy_beside_defects(ds[needed].isel(case=cases))
+    axes = varying_axes(bearing, np.arange(bearing.sizes["case"]))
     if not axes:
         index.note("No grid axis varies among the bearing cases: no metrics view.")
         return
+    if repeated:
+        index.note(f"{repeated} cases without a defect repeat another's grid values: the first is shown.")
     x_axis, y_axis = metric_axes(axes)
-    bearing = ds.isel(case=cases)
     for channel in figures.PANEL_CHANNELS:
         for kind in METRIC_KINDS:
             metric = f"{channel}_{kind}"
@@ -141,7 +271,9 @@ def render_metrics(ds, cases, outdir, index, dpi):
                 index.note(f"{metric}: not shown ({e}).")
                 continue
             index.figure(out, f"{metric} ({figures.unit_text(ds, metric)}) of the bearing cases {shape}, "
-                              "transient ≤ t < duration; facets: the other grid axes; blank: failed or not run.")
+                              "transient ≤ t < duration; facets: the other grid axes; blank: failed or not run"
+                              + ("; defect_race none: the bearing without a defect, in every facet." if
+                                 "defect_race" in axes and (no_defect(bearing)).any() else "."))
 
 
 def render_group(ds, params, counts, outdir, index, channels, dpi):
@@ -172,8 +304,7 @@ def render_group(ds, params, counts, outdir, index, channels, dpi):
                                           select=fixed, ball_counts=chunk, dpi=dpi)
                     index.figure(out, f"amplitude spectra of {figures.CHANNEL_TEXT[channel]}, N_b = {balls}, "
                                       f"ideal mechanism grey, characteristic frequencies marked: {text}.")
-            except (ValueError, KeyError) as e:
-                # KeyError: an ideal-mechanism series the file does not store (`output.series`).
+            except ValueError as e:  # e.g. an ideal-mechanism series the file does not store
                 index.note(f"{channel}, {text}: not shown ({e}).")
 
 
@@ -191,7 +322,7 @@ def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
     groups = panel_groups(ds, cases)
     profiled = [params for params, _ in groups if not np.isfinite(params["rpm"])]
     if profiled:
-        index.note(f"{len(profiled)} combinations run a `speed:` profile (no constant `rpm`): no panels or "
+        index.note(f"{len(profiled)} combinations run a `speed:` profile whose speed varies: no panels or "
                    "spectra here; the diagnosis section shows them.")
         groups = [(params, counts) for params, counts in groups if np.isfinite(params["rpm"])]
     if len(groups) > max_groups:
@@ -205,7 +336,7 @@ def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
 
 def speed_text(ds, case):
     """'600 rpm' for a constant speed, else the profile, e.g. 'run-up 300→900 rpm'."""
-    rpm = diagnosis.constant_rpm(ds, case)
+    rpm = constant_rpm(ds, case)
     if np.isfinite(rpm):
         return f"{rpm:g} rpm"
     profile = diagnosis.text(ds["speed_profile"].values[case])
@@ -220,21 +351,44 @@ def speed_text(ds, case):
 def conditions(ds, cases):
     """{condition: {fault label: case}} of the successful bearing `cases`: a condition
     is the case's speed with the grid axes that vary among them (other than the
-    speed's and the defect's); the fault label is the `fault` variable. Returns also
-    the count of cases left out because an earlier one had the same pair."""
+    speed's and the defect's race); the fault label is the `fault` variable. A case
+    without a defect (`no_defect`) has no defect width, angle or depth: it joins every
+    condition that agrees with it on the other axes (one of its own if none does).
+    Returns also the count of cases left out because an earlier one had the same pair."""
     axes = [a for a in varying_axes(ds, cases) if a not in SPEED_KEYS + FAULT_KEYS]
     if "location" in ds and len(np.unique(ds["location"].values[cases])) > 1 and "location" not in axes:
         axes.insert(0, "location")
-    out, dropped = {}, 0
+    defect_axes = [a for a in axes if a in DEFECT_PARAMETERS]
+    healthy = no_defect(ds)
+
+    def place(case, skip=()):
+        return ", ".join([(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
+                          + figures.value_text(ds, a, ds[a].values[case]) for a in axes if a not in skip]
+                         + [speed_text(ds, case)])
+
+    out, general, dropped = {}, {}, 0
+    later = [int(c) for c in cases if defect_axes and healthy[c]]
     for case in cases:
-        place = [(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
-                 + figures.value_text(ds, a, ds[a].values[case]) for a in axes]
-        group = out.setdefault(", ".join(place + [speed_text(ds, case)]), {})
+        if defect_axes and healthy[case]:
+            continue
+        name = place(case)
+        general.setdefault(name, place(case, defect_axes))
+        group = out.setdefault(name, {})
         label = dfig.fault_label(ds, case)
         if label in group:
             dropped += 1
         else:
             group[label] = int(case)
+    for case in later:
+        own = place(case, defect_axes)
+        joined = False
+        for name in [n for n, g in general.items() if g == own] or [own]:
+            group = out.setdefault(name, {})
+            label = dfig.fault_label(ds, case)
+            if label not in group:
+                group[label] = case
+                joined = True
+        dropped += not joined
     return out, dropped
 
 
@@ -268,7 +422,7 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
     names = list(groups)[:max_groups]
     if len(groups) > max_groups:
         index.note(f"{len(groups)} conditions; the first {max_groups} are shown (raise --max-groups or use --select).")
-    constant = [n for n in names if all(np.isfinite(diagnosis.constant_rpm(ds, c)) for c in groups[n].values())]
+    constant = [n for n in names if all(np.isfinite(constant_rpm(ds, c)) for c in groups[n].values())]
     varying = [n for n in names if n not in constant]
     channels = envelope_channels(ds)
     series = channels[0] if channels else "bearing_force"
@@ -307,7 +461,7 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
     if not varying:
         index.note("No run-up or other varying speed: the spectrogram of the first condition only, no order spectra.")
 
-    speeds = {diagnosis.constant_rpm(ds, c) for g in constant for c in groups[g].values()}
+    speeds = {constant_rpm(ds, c) for g in constant for c in groups[g].values()}
     for channel in channels:
         if len(speeds) < 2 and not varying:
             index.note(f"{channel}: one constant speed only: no waterfall over the crank speed.")
@@ -315,7 +469,8 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
         by_fault = {}
         for name in names:
             for label, case in groups[name].items():
-                by_fault.setdefault(label, []).append(case)
+                if case not in by_fault.setdefault(label, []):  # a healthy case joins several conditions
+                    by_fault[label].append(case)
         out = outdir / f"waterfall_{channel}.png"
         _draw(index, f"waterfall of {channel}",
               lambda: dfig.waterfall(ds, channel, dict(list(by_fault.items())[: dfig.MAX_PANELS]), out, dpi=dpi),
@@ -401,7 +556,7 @@ def report(study, outdir, channels=figures.PANEL_CHANNELS, max_groups=16, dpi=90
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     with open_study(study) as full:
-        ds = restrict(full, selections)
+        ds = with_constant_rpm(mark_healthy(restrict(full, selections)))
         cases = bearing_cases(ds)
         index = Index(f"Study `{ds.attrs.get('study_name', Path(study).stem)}`")
         index.lines += summary(ds, cases)
@@ -428,7 +583,11 @@ def main(argv=None):
                         help="at most this many parameter combinations get panels and spectra (default 16)")
     parser.add_argument("--dpi", type=int, default=90, help="resolution of the PNGs (default 90)")
     args = parser.parse_args(argv)
-    path = report(args.study, args.outdir, args.channels, args.max_groups, args.dpi, args.select)
+    study_file_or_exit("report", args.study)
+    try:
+        path = report(args.study, args.outdir, args.channels, args.max_groups, args.dpi, args.select)
+    except ValueError as e:
+        raise SystemExit(f"report: {e}") from None
     print(path)
 
 

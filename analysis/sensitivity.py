@@ -52,7 +52,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
 import numpy as np  # noqa: E402
 
 from analysis.report import restrict  # noqa: E402
-from analysis.studyfile import grid_axes, open_study, unstack  # noqa: E402
+from analysis.studyfile import grid_axes, open_study, study_file_or_exit, unstack  # noqa: E402
 
 
 class Indices:
@@ -298,6 +298,7 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
     parser.add_argument("--dpi", type=int, default=90, help="resolution of the PNGs (default 90)")
     args = parser.parse_args(argv)
+    study_file_or_exit("sensitivity", args.study)
     try:
         results = analyse(args.study, args.metric, args.method, args.out, args.select, args.resamples,
                           args.conf_level, args.seed, args.dpi)

@@ -29,10 +29,16 @@ import argparse
 import itertools
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 
-import h5py
-import numpy as np
-from scipy import stats
+if __package__ in (None, ""):  # run as a script: make `analysis` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import h5py  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
+
+from analysis.studyfile import study_file_or_exit  # noqa: E402
 
 ALPHA = 0.05
 FLOOR = 1e-3
@@ -55,10 +61,15 @@ class Case:
 
 
 def load(path, metric):
-    """The cases of the study file at `path` with the replicates of `metric`."""
+    """The cases of the study file at `path` with the replicates of `metric`. Raises
+    ValueError if the file has no replicates of `metric`."""
     with h5py.File(path, "r") as f:
         if "replicate" not in f:
-            sys.exit(f"{path}: no replicate dimension; run the study with `replicates:`")
+            raise ValueError(f"{path}: no replicate dimension; run the study with `replicates:`")
+        needed = [f"{metric}_replicates", f"{metric}_mean", f"{metric}_ci95"]
+        if any(name not in f for name in needed):
+            have = sorted(n[: -len("_replicates")] for n in f if n.endswith("_replicates"))
+            raise ValueError(f"{path}: no replicates of {metric!r}; --metric takes one of {', '.join(have)}")
         location = [s.decode() if isinstance(s, bytes) else s for s in f["location"][()]]
         values = f[f"{metric}_replicates"][()]
         status = f["status"][()]
@@ -104,8 +115,22 @@ def fmt(c):
 
 
 def index(cases):
-    """The cases by (location, rpm, waviness, balls)."""
-    return {(c.location, c.rpm, c.waviness, c.balls): c for c in cases}
+    """The cases by (location, rpm, waviness, balls). Raises ValueError naming the
+    combinations of the paper's grid (both locations × the file's speeds × its
+    waviness amplitudes × 8–11 balls) that no successful case covers."""
+    by = {(c.location, c.rpm, c.waviness, c.balls): c for c in cases}
+    rpms = sorted({c.rpm for c in cases})
+    wavs = sorted({c.waviness for c in cases})
+    missing = [key for key in itertools.product(LOCATIONS, rpms, wavs, BALLS) if key not in by]
+    if not cases or missing:
+        shown = "; ".join(f"{loc}, {rpm:g} rpm, waviness {w * 1e6:g} um, {n} balls" for loc, rpm, w, n in missing[:4])
+        more = f" and {len(missing) - 4} more" if len(missing) > 4 else ""
+        raise ValueError(
+            "the file is not on the paper's grid (locations crank_ground and crank_rod × speeds × waviness "
+            f"amplitudes × ball counts {', '.join(map(str, BALLS))}, every case ok): "
+            + (f"no successful case at {shown}{more}" if cases else "it has no successful case")
+        )
+    return by
 
 
 def pair_line(label, a, b):
@@ -228,7 +253,13 @@ def main(argv=None):
     parser.add_argument("--metric", default="slider_acceleration_rms_deviation")
     parser.add_argument("--figure", help="also write the metric per ball count as this PNG")
     args = parser.parse_args(argv)
-    cases = load(args.study, args.metric)
+    study_file_or_exit("significance", args.study, needs=("replicate",),
+                       kind="a study file with replicates (`replicates:` in the grid file)")
+    try:
+        cases = load(args.study, args.metric)
+        index(cases)
+    except ValueError as e:
+        raise SystemExit(f"significance: {e}") from None
     report(cases, args.metric)
     if args.figure:
         print("wrote", figure(cases, args.metric, args.figure))

@@ -8,7 +8,9 @@ Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
 
 open_study opens one file; open_shards opens the shard files of one study
 (`studyrun ... --shard K/N`) as one Dataset ordered by case id, as `studyrun merge`
-would combine them.
+would combine them. A path that is missing or not an HDF5 file raises StudyFileError
+(a ValueError) with a one-line message; the command-line scripts exit with it through
+study_file_or_exit.
 
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
@@ -17,6 +19,7 @@ import glob
 import math
 import os
 
+import h5py
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -35,13 +38,82 @@ IDEAL_CHANNELS = (
 """The series stored for the ideal mechanism as `reference_<channel>` ([reference, time])."""
 
 
+class StudyFileError(ValueError):
+    """A path that cannot be read as the study file wanted; the message names the path
+    and says what is wrong (missing, not HDF5, a variable the file lacks)."""
+
+
+def check_study_file(path, needs=(), kind="a study file written by studyrun"):
+    """Raise StudyFileError unless `path` is an existing HDF5 file that holds every
+    variable or dimension named in `needs`; `kind` says what file is expected, in the
+    message (e.g. "an accuracy file of `studyrun accuracy GRID.yaml`")."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise StudyFileError(f"{path}: no such file; expected {kind}")
+    if not os.path.isfile(path):
+        raise StudyFileError(f"{path}: not a file; expected {kind}")
+    try:
+        hdf5 = h5py.is_hdf5(path)
+    except OSError as e:
+        raise StudyFileError(f"{path}: cannot be read ({e.strerror or e})") from e
+    if not hdf5:
+        raise StudyFileError(f"{path}: not an HDF5 file; expected {kind}")
+    if needs:
+        try:
+            with h5py.File(path, "r") as f:
+                missing = [name for name in needs if name not in f]
+        except OSError as e:
+            raise StudyFileError(f"{path}: an HDF5 file that cannot be opened ({e})") from e
+        if missing:
+            raise StudyFileError(f"{path}: no {', '.join(missing)}: not {kind}")
+
+
+def study_file_or_exit(program, path, needs=(), kind="a study file written by studyrun"):
+    """`check_study_file` for a command line: returns `path` if it passes, else exits
+    with status 1 and the one-line message `program: reason` (no traceback)."""
+    try:
+        check_study_file(path, needs, kind)
+    except StudyFileError as e:
+        raise SystemExit(f"{program}: {e}") from None
+    return path
+
+
 def open_study(path):
     """Open a study file as an xarray Dataset (engine h5netcdf, read lazily).
 
     The variables keep the file's units (`units` attribute of each). Close the
-    dataset (or use it in a `with` block) when done; `.load()` reads it all.
+    dataset (or use it in a `with` block) when done; `.load()` reads it all. Raises
+    StudyFileError if `path` does not exist or is not an HDF5 file.
     """
+    check_study_file(path)
     return xr.open_dataset(path, engine="h5netcdf")
+
+
+def text(value):
+    """A string parameter's value as str (h5py gives variable-length UTF-8 as bytes)."""
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def parameter_value(ds, name, case):
+    """The float value of parameter `name` of `case`, NaN if the file lacks it."""
+    return float(ds[name].values[case]) if name in ds else math.nan
+
+
+def constant_rpm(ds, case):
+    """The crank speed (rpm) of a constant-speed case, NaN for a speed that varies:
+    `rpm`, or a ramp whose `speed_from` equals `speed_to`, or a sine of amplitude 0
+    (each runs as the constant drive, docs/model.md §1.5; the file stores `rpm` NaN for
+    every `speed:` profile). `ds` is the flat study (an xarray Dataset) and `case` a
+    position along `case`."""
+    rpm = parameter_value(ds, "rpm", case)
+    if math.isfinite(rpm):
+        return rpm
+    profile = text(ds["speed_profile"].values[case]) if "speed_profile" in ds else "constant"
+    if profile == "ramp" and parameter_value(ds, "speed_from", case) == parameter_value(ds, "speed_to", case):
+        return parameter_value(ds, "speed_from", case)
+    if profile == "sine" and parameter_value(ds, "speed_amplitude", case) == 0.0:
+        return parameter_value(ds, "speed_mean", case)
+    return math.nan
 
 
 def _has_dask():
@@ -87,7 +159,60 @@ def _combine_shard_attrs(attrs_list, context=None):
     return out
 
 
-def open_shards(paths, lazy=None):
+def _attribute(path, name):
+    """Root attribute `name` of the HDF5 file `path` as a Python scalar or str, None if
+    absent (netCDF tools may store a text attribute as bytes or a one-element array)."""
+    with h5py.File(path, "r") as f:
+        if name not in f.attrs:
+            return None
+        value = f.attrs[name]
+    if isinstance(value, np.ndarray):
+        value = value.reshape(-1)[0] if value.size == 1 else value
+    if isinstance(value, (bytes, np.bytes_)):
+        return value.decode()
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _shard_numbers(paths):
+    """{path: (K, N)} of the files whose `shard` attribute is `K/N`."""
+    out = {}
+    for path in paths:
+        k, sep, n = str(_attribute(path, "shard") or "").partition("/")
+        if sep and k.strip().isdigit() and n.strip().isdigit():
+            out[path] = (int(k), int(n))
+    return out
+
+
+def _check_complete(paths, case_ids, study_cases):
+    """Raise ValueError unless the case ids of the files `paths` are every case of the
+    study (0 .. study_cases − 1), as `studyrun merge` requires, naming the shards
+    (`shard` = K/N) or the case ids missing."""
+    if study_cases is None:
+        raise ValueError(
+            f"{paths[0]} has no study_cases attribute, so whether the shards are complete cannot be "
+            "checked; pass partial=True to open these files alone"
+        )
+    missing = np.setdiff1d(np.arange(int(study_cases)), case_ids)
+    if missing.size == 0:
+        return
+    numbers = _shard_numbers(paths)
+    given = ", ".join(f"{os.path.basename(p)} = {k}/{n}" for p, (k, n) in numbers.items())
+    counts = {n for _, n in numbers.values()}
+    if len(counts) == 1:
+        n = counts.pop()
+        absent = sorted({int(i) % n + 1 for i in missing})
+        what = "shard " + ", ".join(f"{k}/{n}" for k in absent) + (" is" if len(absent) == 1 else " are")
+        what += f" missing (given: {given})"
+    else:
+        shown = ", ".join(str(int(i)) for i in missing[:10]) + (", ..." if missing.size > 10 else "")
+        what = f"case ids {shown} are in none of them" + (f" (given: {given})" if given else "")
+    raise ValueError(
+        f"the files hold {len(case_ids)} of the study's {int(study_cases)} cases: {what}; "
+        "pass every shard, or partial=True to open these alone"
+    )
+
+
+def open_shards(paths, lazy=None, partial=False):
     """Open the shard files of one study (`studyrun ... --shard K/N`) as one Dataset
     ordered by case id: the variables and values `studyrun merge` would write, without
     writing a merged file.
@@ -99,13 +224,20 @@ def open_shards(paths, lazy=None):
     `file_cases` becomes the number of cases opened and `shard` is empty, as in a
     merged file (`created` and other differing attributes are dropped).
 
+    As `studyrun merge` does, the files must hold every case of the study (the root
+    attribute `study_cases`) once: a missing shard is refused with the shards (or case
+    ids) missing named. `partial=True` opens the files given even so, e.g. the shards
+    finished so far; `file_cases` then says how many cases the Dataset holds.
+
     `lazy`: read the data on demand through dask (`xr.open_mfdataset`); the default is
     to do so when dask is installed, else every shard is read into memory. Close the
     result (or use it in a `with` block) when done.
 
-    Raises ValueError if no file matches, the files are shards of different studies
-    (`study_fingerprint`), a case id is in more than one file, or the reference runs,
-    times or frequencies differ between files.
+    Raises StudyFileError (a ValueError) for a missing or non-HDF5 file, and ValueError
+    if no file matches, a file is given twice, the files are shards of different
+    studies (`study_fingerprint`), a case id is in more than one file, the reference
+    runs, times or frequencies differ between files, or (without `partial`) cases of
+    the study are in none of the files.
 
     (`xr.open_mfdataset(paths)` with its defaults fails on shards with "non monotonic
     global index": shard K of N holds the ids K-1, K-1+N, ..., which interleave.)
@@ -118,6 +250,13 @@ def open_shards(paths, lazy=None):
     paths = [os.fspath(p) for p in paths]
     if not paths:
         raise ValueError("no shard files given")
+    seen = {}
+    for path in paths:
+        check_study_file(path, kind="a shard file written by studyrun --shard K/N")
+        real = os.path.realpath(path)
+        if real in seen:
+            raise ValueError(f"{path} is given twice (also as {seen[real]})")
+        seen[real] = path
     if lazy is None:
         lazy = _has_dask()
     combine = dict(
@@ -147,6 +286,12 @@ def open_shards(paths, lazy=None):
     if (counts > 1).any():
         ds.close()
         raise ValueError(f"case ids in more than one file: {ids[counts > 1].tolist()}")
+    if not partial:
+        try:
+            _check_complete(paths, ids, ds.attrs.get("study_cases"))
+        except ValueError:
+            ds.close()
+            raise
     out = ds.sortby("case")
     out.attrs["file_cases"] = np.int64(out.sizes["case"])
     # The shards' files together are no one shard: like a merged file, say none.
@@ -190,13 +335,23 @@ def select_cases(ds, **params):
 
     Numbers are compared with a relative tolerance of 1e-9 in the file's units
     (e.g. `waviness_amplitude=4e-6` in m, `rpm=300` in rpm), NaN matching NaN (a
-    both-races parameter where the races differ); strings exactly.
+    both-races parameter where the races differ); strings exactly. Raises ValueError
+    for a name the file has no per-case variable of, and for a string given for a
+    numeric parameter (units are not parsed: give the number in the file's unit).
     """
     mask = np.ones(ds.sizes["case"], dtype=bool)
     for name, value in params.items():
+        if name not in ds or ds[name].dims != ("case",):
+            raise ValueError(f"{name!r} is not a per-case variable of the study")
         values = ds[name].values
         if values.dtype.kind in "USO":
             mask &= values == value
+        elif isinstance(value, (str, bytes)):
+            units = ds[name].attrs.get("units", "1")
+            raise ValueError(
+                f"{name} is a number in the file's unit ({units}), not {value!r}: give a plain number "
+                f"in that unit (units are not parsed), e.g. {name}={float(values[0]):g}"
+            )
         else:
             mask &= np.isclose(values, value, rtol=1e-9, atol=0.0, equal_nan=True)
     return np.flatnonzero(mask)
@@ -251,6 +406,9 @@ def reference_for(ds, channels=None):
     crank_rod_force_x/y; NaN for `ideal` cases), the quantity the stored
     bearing_force metrics compare with. `channels` limits the result to some of
     these names.
+
+    Raises ValueError naming the `reference_<channel>` series needed that the file
+    does not store (a grid whose `output.series` leaves their channels out).
     """
     wanted = list(IDEAL_CHANNELS) + ["bearing_force"] if channels is None else list(channels)
     unknown = set(wanted) - set(IDEAL_CHANNELS) - {"bearing_force"}
@@ -260,6 +418,16 @@ def reference_for(ds, channels=None):
     needed = set(wanted) & set(IDEAL_CHANNELS)
     if "bearing_force" in wanted:
         needed |= {f"{loc}_force_{c}" for loc in BEARING_LOCATIONS for c in "xy"}
+    absent = sorted(name for name in needed if f"reference_{name}" not in ds)
+    if absent:
+        have = [c for c in IDEAL_CHANNELS if f"reference_{c}" in ds]
+        if all(f"reference_{loc}_force_{c}" in ds for loc in BEARING_LOCATIONS for c in "xy"):
+            have.append("bearing_force")
+        raise ValueError(
+            f"the file does not store the ideal mechanism's {', '.join('reference_' + n for n in absent)}: "
+            f"its grid's `output.series` leaves out {', '.join(absent)}; run the study with `output.series` "
+            f"naming them, or ask for the channels it has (channels={have})"
+        )
     refs = {
         name: ds[f"reference_{name}"].isel(reference=rows).drop_vars("reference", errors="ignore")
         for name in sorted(needed)
@@ -270,16 +438,38 @@ def reference_for(ds, channels=None):
     return xr.Dataset({name: out[name] for name in wanted})
 
 
-def amplitude_spectrum(x, sample_rate):
-    """One-sided amplitude spectrum as studyrun stores it: periodic Hann window,
-    scaled so that a sinusoid of amplitude A on a bin reads A; mean not removed.
+SPECTRUM_WINDOWS = ("hann", "rectangular")
+"""The windows of the stored `<channel>_spectrum` (the grid's `spectra.window`)."""
+
+
+def spectrum_window(ds):
+    """The window of the file's `<channel>_spectrum` variables: its root attribute
+    `spectrum_window` (`hann` or `rectangular`); `hann`, studyrun's default, when the
+    attribute is absent. Raises ValueError for another value."""
+    window = str(ds.attrs.get("spectrum_window", "hann")).strip()
+    if window not in SPECTRUM_WINDOWS:
+        raise ValueError(f"spectrum_window {window!r}: expected one of {', '.join(SPECTRUM_WINDOWS)}")
+    return window
+
+
+def amplitude_spectrum(x, sample_rate, window="hann"):
+    """One-sided amplitude spectrum as studyrun stores it: the `window` (`hann`,
+    periodic, or `rectangular`: pass `spectrum_window(ds)` to match a file's
+    `<channel>_spectrum`), scaled so that a sinusoid of amplitude A on a bin reads A;
+    mean not removed.
 
     `x` is a 1-D series sampled at `sample_rate` (Hz); returns (frequencies in Hz,
-    amplitudes in the series' units).
+    amplitudes in the series' units). The envelope, order and short-time spectra
+    (docs/model.md §7.4–§7.9) use the Hann window whatever the file's `spectra.window`.
     """
     x = np.asarray(x, dtype=float)
     n = len(x)
-    window = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
-    amplitude = np.abs(np.fft.rfft(x * window)) / window.sum()
+    if window == "hann":
+        weights = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
+    elif window == "rectangular":
+        weights = np.ones(n)
+    else:
+        raise ValueError(f"window {window!r}: expected one of {', '.join(SPECTRUM_WINDOWS)}")
+    amplitude = np.abs(np.fft.rfft(x * weights)) / weights.sum()
     amplitude[1 : (n + 1) // 2] *= 2
     return np.fft.rfftfreq(n, 1.0 / sample_rate), amplitude

@@ -13,13 +13,23 @@ predictability horizon.
 """
 
 import argparse
+import sys
+from pathlib import Path
 
-import matplotlib
+if __package__ in (None, ""):  # run as a script: make `analysis` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
+
+from analysis.studyfile import study_file_or_exit  # noqa: E402
+
+ACCURACY_VARIABLES = ("method", "setting", "horizon")
+"""Per-case variables only an accuracy file has (which integrator, its setting, the horizon)."""
 
 MARKERS = {"dopri5": "o", "tsit5": "D", "dop853": "v", "sdirk4": "s", "rk4": "^"}
 
@@ -69,7 +79,7 @@ def plot(ds, out, error="metric", channel="slider_acceleration", cost="wall_time
     return out
 
 
-def main():
+def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="result of `studyrun accuracy GRID.yaml`")
     p.add_argument("out", help="PNG to write")
@@ -78,7 +88,9 @@ def main():
     p.add_argument("--cost", choices=["wall_time", "rhs_evals"], default="wall_time")
     p.add_argument("--stat", choices=["max", "median"], default="max")
     p.add_argument("--chaotic", action="store_true", help="include chaotic cases (horizon shorter than the run)")
-    a = p.parse_args()
+    a = p.parse_args(argv)
+    study_file_or_exit("work_precision", a.file, needs=ACCURACY_VARIABLES + (f"{a.error}_error_{a.channel}",),
+                       kind="an accuracy file (from `studyrun accuracy GRID.yaml`)")
     with xr.open_dataset(a.file, engine="h5netcdf") as ds:
         print(plot(ds.load(), a.out, a.error, a.channel, a.cost, a.stat, a.chaotic))
 

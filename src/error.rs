@@ -15,12 +15,30 @@ pub struct ParamError {
 
 impl ParamError {
     /// Builds the error for `field` holding `value`, where `allowed` says what is allowed.
+    /// A number is shown by [`number`].
     pub fn new(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> Self {
+        let value = value.to_string();
         Self {
             field: field.into(),
-            value: value.to_string(),
+            value: value.parse().map_or(value, number),
             allowed: allowed.into(),
         }
+    }
+
+    /// The message of a refusal: `-0.02 is not allowed: finite and > 0 s`.
+    pub fn refusal(&self) -> String {
+        format!("{} is not allowed: {}", self.value, self.allowed)
+    }
+}
+
+/// A number as a message shows it: its shortest exact decimal form (`0.02`, `9570000000`),
+/// in powers of ten when that form is long (`1e-300`, `2.5e20`).
+pub fn number(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() > 16 {
+        format!("{x:e}")
+    } else {
+        plain
     }
 }
 

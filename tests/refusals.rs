@@ -651,6 +651,37 @@ fn repeated_axis_values_and_zip_rows_are_refused() {
                 "row 2 of zip[0] repeats its row 0",
             ],
         ),
+        // A key without a value, or `~`/`null`, does not silently take the default.
+        (
+            "bearing:\n  clearance:\n  stiffness: 1e10\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:5:12", "`bearing.clearance`", "has no value"],
+        ),
+        (
+            "effects:\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:4:8", "`effects`", "has no value"],
+        ),
+        (
+            "grid: {rpm: [300, ~]}\n",
+            &["r.yaml:4:19", "`grid.rpm[1]`", "is empty"],
+        ),
+        (
+            "rpm: 300\ncases: [{location: null}]\n",
+            &["`cases[0].location`", "has no value"],
+        ),
+        // Flow style names the field and shows the value whole.
+        (
+            "grid: {clearance: [.nan]}\n",
+            &["r.yaml:4:20", "`grid.clearance[0]`", "`.nan`"],
+        ),
+        (
+            "rpm: [300, 600]\ncases: [{location: crank_ground}]\n",
+            &["`rpm`", "`[300, 600]` is not allowed"],
+        ),
+        // A refused value is shown, in powers of ten when long.
+        (
+            "location: crank_gruond\ngrid:\n  rpm: [300]\n",
+            &["`location`", "crank_gruond is not allowed: one of ideal"],
+        ),
     ];
     for (section, needles) in cases {
         write(dir.path(), "r.yaml", &format!("{HEAD}{section}"));
@@ -685,7 +716,7 @@ fn parser_errors_are_in_the_users_words() {
             "grid:\n  rpm: [true]\n",
             &[
                 "r.yaml:5:9",
-                "`grid.rpm`",
+                "`grid.rpm[0]`",
                 "`true` is not allowed",
                 "a number",
             ],
@@ -704,7 +735,7 @@ fn parser_errors_are_in_the_users_words() {
                 "r.yaml:4:12",
                 "`max_cases`",
                 "`-5` is not allowed",
-                "a whole number >= 0",
+                "a whole number from 0 to",
             ],
         ),
         (
@@ -738,6 +769,37 @@ fn parser_errors_are_in_the_users_words() {
                 "at most 13 balls fit between these races",
             ],
         ),
+        // A key without a value, or `~`/`null`, does not silently take the default.
+        (
+            "bearing:\n  clearance:\n  stiffness: 1e10\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:5:12", "`bearing.clearance`", "has no value"],
+        ),
+        (
+            "effects:\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:4:8", "`effects`", "has no value"],
+        ),
+        (
+            "grid: {rpm: [300, ~]}\n",
+            &["r.yaml:4:19", "`grid.rpm[1]`", "is empty"],
+        ),
+        (
+            "rpm: 300\ncases: [{location: null}]\n",
+            &["`cases[0].location`", "has no value"],
+        ),
+        // Flow style names the field and shows the value whole.
+        (
+            "grid: {clearance: [.nan]}\n",
+            &["r.yaml:4:20", "`grid.clearance[0]`", "`.nan`"],
+        ),
+        (
+            "rpm: [300, 600]\ncases: [{location: crank_ground}]\n",
+            &["`rpm`", "`[300, 600]` is not allowed"],
+        ),
+        // A refused value is shown, in powers of ten when long.
+        (
+            "location: crank_gruond\ngrid:\n  rpm: [300]\n",
+            &["`location`", "crank_gruond is not allowed: one of ideal"],
+        ),
     ];
     for (section, needles) in cases {
         write(dir.path(), "r.yaml", &format!("{HEAD}{section}"));
@@ -747,6 +809,18 @@ fn parser_errors_are_in_the_users_words() {
         }
         assert_eq!(err.lines().count(), 1, "one line: {err}");
     }
+    // A number far from 1 is shown in powers of ten, not in 300 digits.
+    write(
+        dir.path(),
+        "t.yaml",
+        "name: t\nduration: 1e-300\nsample_rate: 10000\ngrid:\n  rpm: [300]\n",
+    );
+    let err = refused(
+        &studyrun(dir.path(), &["validate", "t.yaml"]),
+        2,
+        &["`transient`", "duration = 1e-300 s"],
+    );
+    assert!(err.len() < 400, "{err}");
     // A missing field names the field, not a place it is not.
     write(
         dir.path(),

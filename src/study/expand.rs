@@ -13,6 +13,7 @@ use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
 use super::{Case, SeriesOutput, Study, StudyError, DEFAULT_MAX_CASES};
+use crate::error::number;
 
 mod design;
 mod memory_check;
@@ -211,7 +212,7 @@ impl Ctx<'_> {
             };
             let site = t
                 .parse()
-                .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.allowed))?;
+                .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.refusal()))?;
             return Ok(Target::Location(site));
         }
         if name == "defect_race" {
@@ -350,11 +351,7 @@ impl Ctx<'_> {
         };
         p.validate().map_err(|e| {
             let field = e.field.replacen("speed", prefix, 1);
-            self.err(
-                place,
-                &field,
-                format!("{} is not allowed: {}", e.value, e.allowed),
-            )
+            self.err(place, &field, e.refusal())
         })?;
         for key in fields {
             if let Some(param) = lookup(&format!("speed_{key}")) {
@@ -463,6 +460,9 @@ struct ResolvedAxis<'a> {
 /// settings, memory.
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
+    if let Some((place, field, message)) = super::tree::first_empty(text) {
+        return Err(ctx.err(Some(place), &field, message));
+    }
     let file: GridFile = serde_saphyr::from_str(text).map_err(|e| {
         let (place, field, message) = super::yaml::describe(&e, text);
         ctx.err(place, &field, message)
@@ -632,7 +632,7 @@ fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, StudyError> {
                 &file.sample_rate.referenced
             })),
             &e.field,
-            e.allowed,
+            e.refusal(),
         )
     })?;
     Ok(sampling)
@@ -920,8 +920,9 @@ fn transient_of(
                     Some(at(&v.referenced)),
                     "transient",
                     format!(
-                        "{x} s is not allowed: >= 0 and below duration = {} s",
-                        sampling.duration
+                        "{} s is not allowed: >= 0 and below duration = {} s",
+                        number(x),
+                        number(sampling.duration)
                     ),
                 ));
             }
@@ -936,12 +937,13 @@ fn transient_of(
             file.transient.as_ref().map(|v| at(&v.referenced)),
             "transient",
             format!(
-                "{transient} s leaves {analysed} sample(s) in the analysed window \
+                "{} s leaves {analysed} sample(s) in the analysed window \
                  transient <= t < duration = {} s at {} Hz; at least 2 are needed \
                  (a transient of at most {} s, or a longer duration)",
-                sampling.duration,
-                sampling.sample_rate,
-                last_sample.saturating_sub(2) as f64 / sampling.sample_rate
+                number(transient),
+                number(sampling.duration),
+                number(sampling.sample_rate),
+                number(last_sample.saturating_sub(2) as f64 / sampling.sample_rate)
             ),
         ));
     }
@@ -1442,11 +1444,9 @@ fn finish_case(
                 || (*name == "location" && e.field == "location")
         });
         match source {
-            Some((_, field, place)) => ctx.err(
-                Some(*place),
-                field,
-                format!("{} is not allowed: {} (case {id})", e.value, e.allowed),
-            ),
+            Some((_, field, place)) => {
+                ctx.err(Some(*place), field, format!("{} (case {id})", e.refusal()))
+            }
             None => ctx.err(
                 None,
                 &e.field,
@@ -1952,11 +1952,7 @@ fn defects(
                 } else {
                     &d.depth.referenced
                 };
-                ctx.err(
-                    Some(at(place)),
-                    &e.field,
-                    format!("{} is not allowed: {}", e.value, e.allowed),
-                )
+                ctx.err(Some(at(place)), &e.field, e.refusal())
             })?;
             Ok(defect)
         })
@@ -2014,13 +2010,10 @@ fn harris(
             }
         }
     }
-    geometry.harris_stiffness().map(|k| k.total).map_err(|e| {
-        ctx.err(
-            Some(place),
-            &e.field,
-            format!("{} is not allowed: {}", e.value, e.allowed),
-        )
-    })
+    geometry
+        .harris_stiffness()
+        .map(|k| k.total)
+        .map_err(|e| ctx.err(Some(place), &e.field, e.refusal()))
 }
 
 fn solver(

@@ -14,6 +14,7 @@ pub mod design;
 mod expand;
 pub mod memory;
 pub mod params;
+mod tree;
 pub mod units;
 mod yaml;
 

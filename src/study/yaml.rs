@@ -16,7 +16,9 @@ pub(super) fn describe(e: &Error, text: &str) -> (Option<(u64, u64)>, String, St
         .location()
         .map(|l| (l.line(), l.column()))
         .filter(|&(line, column)| line > 0 && column > 0);
-    let field = place.map_or_else(String::new, |(l, c)| field_at(text, l, c));
+    let field = place.map_or_else(String::new, |(l, c)| {
+        super::tree::field_at(text, l, c).unwrap_or_else(|| field_at(text, l, c))
+    });
     let token = place.map(|(l, c)| token_at(text, l, c)).unwrap_or_default();
     let got = if token.is_empty() {
         String::new()
@@ -134,7 +136,9 @@ fn type_name(ty: &str) -> &'static str {
         "float" | "number" => "a number",
         "string" => "a text",
         "u8" => "a whole number from 0 to 255",
-        "u16" | "u32" | "u64" | "usize" => "a whole number >= 0",
+        "u16" => "a whole number from 0 to 65535",
+        "u32" => "a whole number from 0 to 4294967295",
+        "u64" | "usize" => "a whole number from 0 to 18446744073709551615 (2^64 - 1)",
         "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number",
         "f32" | "f64" => "a number",
         "bool" => "true or false",
@@ -182,6 +186,8 @@ fn token_at(text: &str, line: u64, column: u64) -> String {
     let rest = rest.trim_start();
     let token = if let Some(q) = rest.strip_prefix('"') {
         q.split('"').next().unwrap_or("").to_string()
+    } else if rest.starts_with(['[', '{']) {
+        flow_collection(rest).to_string()
     } else {
         rest.split([',', ']', '}', '#'])
             .next()
@@ -196,10 +202,30 @@ fn token_at(text: &str, line: u64, column: u64) -> String {
     }
 }
 
+/// The flow collection `rest` starts with (`[300, 600]`, `{a: 1}`), up to its closing
+/// bracket, or all of `rest` if it does not close on this line.
+fn flow_collection(rest: &str) -> &str {
+    let mut depth = 0usize;
+    for (i, c) in rest.char_indices() {
+        match c {
+            '[' | '{' => depth += 1,
+            ']' | '}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return &rest[..=i];
+                }
+            }
+            _ => {}
+        }
+    }
+    rest
+}
+
 /// The dotted name of the field at (`line`, `column`) of a block-style YAML `text`:
 /// the keys of the enclosing mappings (from indentation) and the indices of the
 /// enclosing `- ` list items, e.g. `bearing.waviness.amplitude` or `cases[1].rpm`. A
-/// best effort for messages: empty where the structure is not plain block style.
+/// best effort for messages about text that does not parse as YAML ([`super::tree::field_at`]
+/// names the field of text that does): empty where the structure is not plain block style.
 pub(super) fn field_at(text: &str, line: u64, column: u64) -> String {
     // The open mappings and list items: (indent, segment, items seen at this level).
     let mut stack: Vec<(usize, String)> = Vec::new();
