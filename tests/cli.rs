@@ -318,6 +318,45 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
+/// `--force` replaces a result only when its own run is finished: killed on the way,
+/// the old result is still there, whole, beside the new run's journal; `--resume`
+/// finishes the new run and its file replaces the old one.
+#[test]
+fn a_forced_run_killed_on_the_way_leaves_the_old_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let grid = "name: long\nduration: 0.4\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
+    write(d, "old.yaml", &grid.replace("[300, 600]", "[300]"));
+    write(d, "long.yaml", grid);
+    assert!(studyrun(d, &["old.yaml", "-o", "out.h5", "-q"])
+        .status
+        .success());
+    let before = std::fs::read(d.join("out.h5")).unwrap();
+    let journal = d.join("out.h5.journal");
+    kill_when_journal_passes(
+        d,
+        &["long.yaml", "-o", "out.h5", "--force", "-j", "1", "-q"],
+        &journal,
+        1500,
+    );
+    assert_eq!(
+        std::fs::read(d.join("out.h5")).unwrap(),
+        before,
+        "the old result is whole"
+    );
+    let resumed = studyrun(d, &["long.yaml", "-o", "out.h5", "--resume", "-q"]);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(!journal.exists());
+    assert!(studyrun(d, &["long.yaml", "-o", "straight.h5", "-q"])
+        .status
+        .success());
+    assert_same_data(&d.join("out.h5"), &d.join("straight.h5"));
+}
+
 /// A run stopped before its journal's header was whole (killed between creating the
 /// journal and writing it) recorded nothing: `--resume` starts the run afresh, whatever
 /// partial file lies beside it, and gives the uninterrupted result.

@@ -370,12 +370,12 @@ fn complete_result(
     })
 }
 
-/// Creates the partial file and writes the ideal references into it. The references
-/// run, and with `--force` the old result file is unlinked (milliseconds for a large
-/// file), while the file is created; both are done before the journal exists, so a
-/// kill cannot leave a journal beside an old result. Returns the writer, the
-/// references and which partial file it writes (a resumed run writes the other one
-/// than its journal's cases are in).
+/// Creates the partial file and writes the ideal references into it; the references
+/// run while the file is created. A result file already at the output (`--force`)
+/// stays until the finished run's file is renamed over it, so a run stopped on the
+/// way loses nothing: its journal beside the old result resumes the new run. Returns
+/// the writer, the references and which partial file it writes (a resumed run writes
+/// the other one than its journal's cases are in).
 fn create_file(
     study: &Study,
     opts: &RunOptions,
@@ -386,16 +386,12 @@ fn create_file(
     let data = reader.map_or(DataFile::Partial, |r| r.data_file().other());
     let partial_path = data.path(&opts.output);
     let cpu = thread_cpu();
-    let (references, writer, removed) = std::thread::scope(|scope| {
+    let (references, writer) = std::thread::scope(|scope| {
         let references = scope.spawn(|| run_references(study));
-        let removed = opts
-            .force
-            .then(|| scope.spawn(|| remove_if_exists(&opts.output)));
         let writer =
             StudyWriter::create(&partial_path, layout).map_err(RunError::file(&partial_path));
-        (joined(references), writer, removed.map_or(Ok(()), joined))
+        (joined(references), writer)
     });
-    removed?;
     let (references, mut writer) = (references?, writer?);
     let stored = stored_reference_channels(study);
     for (k, r) in references.iter().enumerate() {
