@@ -991,6 +991,44 @@ fn the_shipped_studies_have_no_impossible_case() {
     }
 }
 
+/// A ball over a deep defect drops into it and the journal follows, by up to the
+/// defect's effective depth, which the eccentricity bound allows: three, four and six
+/// balls under an 8 mm x 200 um rounded outer-race defect (h_eff = 200 um) at 600 rpm
+/// are valid cases, and at least one of them goes beyond what the clearance and the
+/// Hertz penetration alone allow (the same check without the defect refuses it).
+#[test]
+fn a_deep_defect_is_within_the_eccentricity_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = write(
+        dir.path(),
+        "deep.yaml",
+        "name: deep\nduration: 0.1\nsample_rate: 20000\n\
+         effects: [clearance, damping, defects]\nrpm: 600\nbearing:\n  defects: \
+         [{race: outer, angle: \"0 deg\", width: \"8 mm\", depth: \"200 um\", profile: rounded}]\n\
+         grid:\n  location: [crank_ground]\n  ball_count: [3, 4, 6]\n",
+    );
+    let study = Study::load(&grid).unwrap();
+    let verdicts: Vec<String> = map_cases(&study, |row| {
+        let case = &study.cases[row];
+        let out = simulate(&case.params, &study.solver, &study.sampling).unwrap();
+        let mut flat = case.params.clone();
+        flat.bearing.defects.clear();
+        Some(match check_eccentricity(&case.params, &out) {
+            Err(e) => format!("refused case {}: {e}", case.id),
+            Ok(()) if check_eccentricity(&flat, &out).is_err() => "needs the defect".into(),
+            Ok(()) => "within the flat bound".into(),
+        })
+    });
+    assert!(
+        verdicts.iter().all(|v| !v.starts_with("refused")),
+        "{verdicts:?}"
+    );
+    assert!(
+        verdicts.iter().any(|v| v == "needs the defect"),
+        "{verdicts:?}"
+    );
+}
+
 /// `f` of every case row of `study`, on two threads.
 fn map_cases(study: &Study, f: impl Fn(usize) -> Option<String> + Sync) -> Vec<String> {
     let n = study.cases.len();

@@ -129,6 +129,22 @@ impl Defect {
         &mut list[0]
     }
 
+    /// How deep a ball of `ball_diameter` (m) can dip into a defect of this width
+    /// (m): `R − √(R² − a²)`, `R` the ball's radius and `a` half the width (at most
+    /// `R`), docs/model.md §2.9.
+    pub fn geometric_depth(&self, ball_diameter: f64) -> f64 {
+        let ball_radius = 0.5 * ball_diameter;
+        let reach = (0.5 * self.width).min(ball_radius);
+        // R − √(R² − a²) = a² / (R + √(R² − a²)), without cancellation.
+        reach * reach / (ball_radius + (ball_radius * ball_radius - reach * reach).sqrt())
+    }
+
+    /// The effective depth `h_eff = min(h, R − √(R² − a²))` (m): the most the defect
+    /// lowers a ball's deflection (docs/model.md §2.9).
+    pub fn effective_depth(&self, ball_diameter: f64) -> f64 {
+        self.depth.max(0.0).min(self.geometric_depth(ball_diameter))
+    }
+
     /// Checks every field; `prefix` (e.g. `bearing.defects[0]`) names it in errors.
     pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
         if !self.angle.is_finite() {
@@ -269,11 +285,7 @@ impl Track {
         ball_diameter: f64,
     ) -> Vec<Track> {
         let ball_radius = 0.5 * ball_diameter;
-        let half_width = 0.5 * defect.width;
-        let reach = half_width.min(ball_radius);
-        // R − √(R² − a²) = a² / (R + √(R² − a²)), without cancellation.
-        let geometric =
-            reach * reach / (ball_radius + (ball_radius * ball_radius - reach * reach).sqrt());
+        let geometric = defect.geometric_depth(ball_diameter);
         let floor = defect.depth.min(geometric);
         // Where the depth, not the width, limits the ball, a rounded ramp reaches
         // the floor at d*; else only at the centre, where both edges hold the ball:
@@ -300,7 +312,7 @@ impl Track {
                     meets,
                     radius,
                     balls,
-                    half_width,
+                    half_width: 0.5 * defect.width,
                     whole: defect.width >= TAU * radius,
                     rounded: defect.profile == DefectProfile::Rounded,
                     ball_radius,

@@ -281,17 +281,18 @@ pub const ECCENTRICITY_SLACK: f64 = 1e-6;
 
 /// Checks that a simulated bearing case is physically possible: the journal centre
 /// (eccentricity `e`, the `eccentricity_x/_y` channels) stays within what the
-/// clearance, the waviness and the Hertz penetration of the largest bearing force
-/// allow, and that penetration stays far below the ball size. With `G = P_d/2 + ΣΠ`
-/// (ΣΠ: every waviness amplitude and offset of both races), `c = cos(π/N_b)` (the
+/// clearance, the waviness, the defects and the Hertz penetration of the largest
+/// bearing force allow, and that penetration stays far below the ball size. With
+/// `G = P_d/2 + ΣΠ + Σh` (ΣΠ: every waviness amplitude and offset of both races; Σh:
+/// every defect's effective depth `h_eff`), `c = cos(π/N_b)` (the
 /// ball nearest the direction of `e` is at most `π/N_b` from it) and `F_max` the
 /// largest sampled `|F|`:
 ///
-/// - *consistency*: `|e| ≤ 1.5 max(|P_d|/2 + ΣΠ, (G + (F_max/(K c))^{2/3}) / c) + 1 µm`;
+/// - *consistency*: `|e| ≤ 1.5 max(|P_d|/2 + ΣΠ + Σh, (G + (F_max/(K c))^{2/3}) / c) + 1 µm`;
 ///   the nearest ball's deflection is at most `(|F|/(K c))^{2/3}` when ball forces
 ///   are at least `K δ^{3/2}` (docs/model.md §2), so a converged run stays well inside;
 ///   a run beyond it is an integration gone wrong;
-/// - *elastic contact*: `|e| ≤ (|P_d|/2 + ΣΠ + D/10) / c + 1 µm` with the ball
+/// - *elastic contact*: `|e| ≤ (|P_d|/2 + ΣΠ + Σh + D/10) / c + 1 µm` with the ball
 ///   diameter `D = (d_o − d_i)/2`: a contact deflection of a tenth of the ball is far
 ///   beyond elastic (Hertz) contact of steel; the load is too high for the bearing.
 ///
@@ -320,14 +321,21 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
         .iter()
         .map(|w| w.offset.abs() + w.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>())
         .sum();
+    // A ball over a defect is lowered by up to the defect's effective depth.
+    let defects: f64 = b
+        .defects
+        .iter()
+        .map(|d| d.effective_depth(b.ball_diameter))
+        .sum();
+    let profile = waviness + defects;
     let spacing = (std::f64::consts::PI / b.ball_count.max(3) as f64).cos();
-    let gap = 0.5 * b.clearance.abs() + waviness;
+    let gap = 0.5 * b.clearance.abs() + profile;
     let hertz = if b.stiffness > 0.0 {
         (f_max / (b.stiffness * spacing)).powf(2.0 / 3.0)
     } else {
         f64::INFINITY
     };
-    let consistent = gap.max((0.5 * b.clearance + waviness + hertz) / spacing);
+    let consistent = gap.max((0.5 * b.clearance + profile + hertz) / spacing);
     let consistent_bound = ECCENTRICITY_MARGIN * consistent + ECCENTRICITY_SLACK;
     let ball = 0.5 * (b.outer_race_diameter - b.inner_race_diameter);
     let elastic_bound = (gap + 0.1 * ball) / spacing + ECCENTRICITY_SLACK;
@@ -337,12 +345,12 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
         return Err(format!(
             "physically impossible result: the journal centre moved |e| = {:.1} um from the \
              housing centre (t = {t:.4} s), more than the clearance (P_d/2 = {:.1} um), the \
-             waviness ({:.1} um) and the Hertz penetration of the largest bearing force \
+             waviness and defects ({:.1} um) and the Hertz penetration of the largest bearing force \
              ({f_max:.3e} N: {:.1} um) allow (bound {:.1} um with margin x{ECCENTRICITY_MARGIN} \
              + 1 um); the integration went wrong: try a tighter rtol or a smaller step",
             um(e_max),
             um(0.5 * b.clearance),
-            um(waviness),
+            um(profile),
             um(hertz),
             um(consistent_bound),
         ));
@@ -350,13 +358,13 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
     if e_max > elastic_bound {
         return Err(format!(
             "physically impossible result: the journal centre moved |e| = {:.1} um from the \
-             housing centre (t = {t:.4} s), more than the clearance (P_d/2 = {:.1} um) and \
-             waviness ({:.1} um) allow plus a tenth of the ball diameter (D/10 = {:.1} um): \
+             housing centre (t = {t:.4} s), more than the clearance (P_d/2 = {:.1} um), \
+             waviness and defects ({:.1} um) allow plus a tenth of the ball diameter (D/10 = {:.1} um): \
              a ball contact deflection that large is far outside elastic (Hertz) contact; the \
              load (largest bearing force {f_max:.3e} N) is too high for this bearing",
             um(e_max),
             um(0.5 * b.clearance),
-            um(waviness),
+            um(profile),
             um(0.1 * ball),
         ));
     }

@@ -262,14 +262,14 @@ impl EnvelopePlan {
             .map_err(|e| SpectrumError::Fft(e.to_string()))
     }
 
-    /// Fills `analytic` with `z_j = (1/n) Σ_{k in band} 2 Y_k e^{2πi jk/n}` (docs/model.md
-    /// §7.4).
+    /// Fills `analytic` with `z_j = (1/n) Σ_{k in band} Z_k e^{2πi jk/n}`, `Z_k = 2 Y_k`
+    /// but `Y_k` at DC and at Nyquist (docs/model.md §7.4).
     fn analytic_signal(&mut self, band: Band) {
         let n = self.analytic.len();
         self.analytic.fill(Complex::default());
         for (k, (&f, &y)) in self.freqs.iter().zip(&self.spectrum).enumerate() {
             if band.contains(f) {
-                self.analytic[k] = 2.0 * y;
+                self.analytic[k] = analytic_weight(k, n) * y;
             }
         }
         self.inverse
@@ -286,7 +286,8 @@ impl EnvelopePlan {
     /// (`d = 0..B`, by an FFT of length `≥ 2B`), Parseval applied to `|z_j|²` gives
     /// `Σ_j |z_j|⁴ / (Σ_j |z_j|²)² · n = (R_0² + 2 Σ_{d≥1} |R_d|²) / R_0²`, where a lag
     /// `d = n/2` (the whole band of an even `n`) meets its mirror `−n/2` and counts
-    /// `(2 Re R_d)²` instead. The common factor 2 of the `Z_k` cancels.
+    /// `(2 Re R_d)²` instead. The common factor 2 of the `Z_k` cancels: the bins are
+    /// taken as `Z_k / 2`, so DC and Nyquist count half.
     fn band_kurtosis(&mut self, band: Band) -> f64 {
         let Some(k0) = self.freqs.iter().position(|&f| band.contains(f)) else {
             return f64::NAN;
@@ -298,8 +299,10 @@ impl EnvelopePlan {
         let len = (2 * bins).next_power_of_two();
         let forward = self.planner.plan_fft_forward(len);
         let inverse = self.planner.plan_fft_inverse(len);
+        let n = self.centred.len();
         self.lags.clear();
-        self.lags.extend_from_slice(&self.spectrum[k0..k0 + bins]);
+        self.lags
+            .extend((k0..k0 + bins).map(|k| 0.5 * analytic_weight(k, n) * self.spectrum[k]));
         self.lags.resize(len, Complex::default());
         let scratch = forward
             .get_inplace_scratch_len()
@@ -422,6 +425,17 @@ impl EnvelopePlan {
     /// The sample rate the plan was made for (Hz).
     pub fn sample_rate(&self) -> f64 {
         self.sample_rate
+    }
+}
+
+/// The factor of bin `k` of an `n`-sample real FFT in the analytic signal: 2 for the
+/// positive frequencies, 1 for DC and, for even `n`, Nyquist, which have no negative
+/// twin (so that the analytic signal's real part is the band-passed signal).
+fn analytic_weight(k: usize, n: usize) -> f64 {
+    if k == 0 || 2 * k == n {
+        1.0
+    } else {
+        2.0
     }
 }
 

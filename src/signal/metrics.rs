@@ -28,7 +28,8 @@ impl Deviation {
             let d = a - b;
             sum += d * d;
             sum_ref += b * b;
-            peak = if d.is_nan() {
+            // `f64::max` drops a NaN operand: once NaN, the peak stays NaN.
+            peak = if d.is_nan() || peak.is_nan() {
                 f64::NAN
             } else {
                 peak.max(d.abs())
@@ -85,24 +86,36 @@ pub fn vibration_metrics(
         let end = window.end.min(series.len());
         &series[window.start.min(end)..end]
     }
-    let joint = match case.location {
-        Location::CrankRod => ("crank_rod_force_x", "crank_rod_force_y"),
-        _ => ("crank_ground_force_x", "crank_ground_force_y"),
-    };
-    let ideal_force: Vec<f64> = part(ideal, joint.0, &window)
-        .iter()
-        .zip(part(ideal, joint.1, &window))
-        .map(|(x, y)| x.hypot(*y))
-        .collect();
     let dev =
         |name: &str, reference: &[f64]| Deviation::between(part(case, name, &window), reference);
+    let joint = match case.location {
+        Location::CrankRod => Some(("crank_rod_force_x", "crank_rod_force_y")),
+        Location::CrankGround => Some(("crank_ground_force_x", "crank_ground_force_y")),
+        Location::Ideal => None,
+    };
+    // The ideal mechanism has no bearing: no force to compare, nor a reference for it.
+    let bearing_force = joint.map_or(
+        Deviation {
+            rms: f64::NAN,
+            peak: f64::NAN,
+            reference_rms: f64::NAN,
+        },
+        |(x, y)| {
+            let ideal_force: Vec<f64> = part(ideal, x, &window)
+                .iter()
+                .zip(part(ideal, y, &window))
+                .map(|(x, y)| x.hypot(*y))
+                .collect();
+            dev("bearing_force", &ideal_force)
+        },
+    );
     VibrationMetrics {
         slider_acceleration: dev(
             "slider_acceleration",
             part(ideal, "slider_acceleration", &window),
         ),
         crank_moment: dev("crank_moment", part(ideal, "crank_moment", &window)),
-        bearing_force: dev("bearing_force", &ideal_force),
+        bearing_force,
     }
 }
 
@@ -134,5 +147,39 @@ mod tests {
             "{}",
             closed.rms
         );
+    }
+
+    #[test]
+    fn an_ideal_case_has_no_bearing_force_statistics() {
+        let n = 8;
+        let output = |location| CaseOutput {
+            location,
+            times: (0..n).map(|k| k as f64).collect(),
+            channels: vec![vec![1.5; n]; crate::simulate::CHANNELS.len()],
+            stats: Default::default(),
+            wall_time: 0.0,
+        };
+        let ideal = output(Location::Ideal);
+        let m = vibration_metrics(&ideal, &ideal, 2..n);
+        let f = m.bearing_force;
+        assert!(
+            f.rms.is_nan() && f.peak.is_nan() && f.reference_rms.is_nan(),
+            "{f:?}"
+        );
+        assert_eq!(m.slider_acceleration.rms, 0.0);
+        assert_eq!(m.slider_acceleration.reference_rms, 1.5);
+        // A bearing case has them, against the joint it sits at.
+        let g = vibration_metrics(&output(Location::CrankGround), &ideal, 2..n).bearing_force;
+        assert!((g.reference_rms - 1.5 * 2f64.sqrt()).abs() < 1e-15, "{g:?}");
+    }
+
+    #[test]
+    fn a_nan_anywhere_makes_every_statistic_nan() {
+        for at in 0..4 {
+            let mut case = vec![1.0, -3.0, 2.0, 0.5];
+            case[at] = f64::NAN;
+            let d = Deviation::between(&case, &[0.0; 4]);
+            assert!(d.rms.is_nan() && d.peak.is_nan(), "NaN at {at}: {d:?}");
+        }
     }
 }

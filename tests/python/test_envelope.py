@@ -68,7 +68,11 @@ def amplitude(x):
 def analytic(y_fft, freqs, low, high, n):
     z = np.zeros(n, dtype=complex)
     sel = (freqs >= low) & (freqs <= high)
-    z[: len(freqs)][sel] = 2 * y_fft[sel]
+    weight = np.full(len(freqs), 2.0)
+    weight[0] = 1.0  # DC and (even n) Nyquist have no negative-frequency twin
+    if n % 2 == 0:
+        weight[-1] = 1.0
+    z[: len(freqs)][sel] = weight[sel] * y_fft[sel]
     return np.fft.ifft(z), sel.sum()
 
 
