@@ -289,7 +289,7 @@ pub fn run(
         .map(|k| {
             reference(study, k, &ideals[study.cases[k].reference]).map_err(|e| {
                 anyhow::anyhow!(
-                    "reference run of case {} failed (reference {REFERENCE:?}): {e}",
+                    "reference run of case {} failed (reference {REFERENCE}): {e}",
                     study.cases[k].id
                 )
             })
@@ -459,7 +459,7 @@ pub fn write_file(
         ("grid_yaml".to_string(), study.source.clone().into()),
         (
             "reference".to_string(),
-            format!("{REFERENCE:?}, validated by {CHECK:?}").into(),
+            format!("{REFERENCE}, validated by {CHECK}").into(),
         ),
         ("horizon_threshold".to_string(), HORIZON_THRESHOLD.into()),
         ("duration".to_string(), study.sampling.duration.into()),

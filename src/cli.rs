@@ -668,9 +668,9 @@ fn accuracy_command(
         chaotic.join(", ")
     )?;
     match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01, study.sampling.duration) {
-        Some((m, judged)) => out!(
-            "cheapest setting with metric error < 1 % on the {judged} non-chaotic cases: {m:?}"
-        )?,
+        Some((m, judged)) => {
+            out!("cheapest setting with metric error < 1 % on the {judged} non-chaotic cases: {m}")?
+        }
         None => out!("no setting keeps the metric error below 1 % on every non-chaotic case")?,
     }
     accuracy::write_file(&output, &study, &refs, &ms)?;

@@ -165,7 +165,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             shard.map_or(String::new(), |s| s.to_string()).into(),
         ),
         ("model_conventions".to_string(), MODEL_CONVENTIONS.into()),
-        ("solver".to_string(), format!("{:?}", study.solver).into()),
+        ("solver".to_string(), study.solver.to_string().into()),
         ("duration".to_string(), study.sampling.duration.into()),
         ("sample_rate".to_string(), study.sampling.sample_rate.into()),
         ("transient".to_string(), study.transient.into()),

@@ -182,6 +182,43 @@ impl SolverSettings {
     }
 }
 
+impl std::fmt::Display for Method {
+    /// As a grid file's `solver:` block names it: `dop853 (rtol 1e-8, atol 1e-12)`,
+    /// `rk4 (step 1e-5 s)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (name, rtol, atol) = match *self {
+            Method::DormandPrince { rtol, atol } => ("dopri5", rtol, atol),
+            Method::Tsit5 { rtol, atol } => ("tsit5", rtol, atol),
+            Method::Dop853 { rtol, atol } => ("dop853", rtol, atol),
+            Method::Sdirk4 { rtol, atol } => ("sdirk4", rtol, atol),
+            Method::Rk4 { step } => return write!(f, "rk4 (step {step:e} s)"),
+        };
+        write!(f, "{name} (rtol {rtol:e}, atol {atol:e})")
+    }
+}
+
+impl std::fmt::Display for SolverSettings {
+    /// Every setting, in the grid file's words: `dop853 (rtol 1e-8, atol 1e-12),
+    /// max_steps 10000000, max_step none, locate_events true, stiffness_switch true`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}, max_steps {}, max_step ",
+            self.method, self.max_steps
+        )?;
+        if self.max_step.is_finite() {
+            write!(f, "{:e} s", self.max_step)?;
+        } else {
+            f.write_str("none")?;
+        }
+        write!(
+            f,
+            ", locate_events {}, stiffness_switch {}",
+            self.locate_events, self.stiffness_switch
+        )
+    }
+}
+
 impl Default for SolverSettings {
     /// [`Method::DEFAULT`] with [`SolverSettings::new`]'s budget and event location.
     fn default() -> Self {
