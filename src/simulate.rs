@@ -20,7 +20,9 @@ pub struct Sampling {
 }
 
 impl Sampling {
-    /// Checks both fields and that the number of samples is sane (≤ 1e9).
+    /// Checks both fields, that the number of samples is sane (≤ 1e9) and that the
+    /// duration is a whole number of sample intervals (to 1e-6 of one), so that the
+    /// last sample is at `t = duration`.
     pub fn validate(&self) -> Result<(), ParamError> {
         if !(self.duration.is_finite() && self.duration > 0.0) {
             return Err(ParamError::new(
@@ -41,6 +43,27 @@ impl Sampling {
                 "sample_rate",
                 self.sample_rate,
                 "at most 1e9 samples per case (duration x sample_rate)",
+            ));
+        }
+        // The last sample is at t = duration: a whole number of sample intervals.
+        let intervals = self.duration * self.sample_rate;
+        if (intervals - intervals.round()).abs() > 1e-6 * intervals.max(1.0) {
+            let n = intervals.round().max(1.0);
+            // Ten significant digits: enough to land on a sample.
+            let nearby = |x: f64| {
+                crate::error::number(format!("{x:.9e}").parse::<f64>().unwrap_or(x))
+            };
+            return Err(ParamError::new(
+                "duration",
+                self.duration,
+                format!(
+                    "a whole number of sample intervals: duration x sample_rate = {} is not \
+                     one, so no sample would fall at t = duration; {} s or {} s would be, at {} Hz",
+                    crate::error::number(intervals),
+                    nearby(n / self.sample_rate),
+                    nearby((n + 1.0) / self.sample_rate),
+                    crate::error::number(self.sample_rate),
+                ),
             ));
         }
         Ok(())

@@ -809,6 +809,22 @@ fn parser_errors_are_in_the_users_words() {
         }
         assert_eq!(err.lines().count(), 1, "one line: {err}");
     }
+    // The last sample falls at t = duration, or the duration is refused.
+    write(
+        dir.path(),
+        "w.yaml",
+        "name: w\nduration: 0.2\nsample_rate: 10001\ngrid:\n  rpm: [300]\n",
+    );
+    refused(
+        &studyrun(dir.path(), &["validate", "w.yaml"]),
+        2,
+        &[
+            "w.yaml:2:11",
+            "`duration`",
+            "duration x sample_rate = 2000.2",
+            "0.199980002 s or 0.200079992 s",
+        ],
+    );
     // A number far from 1 is shown in powers of ten, not in 300 digits.
     write(
         dir.path(),
