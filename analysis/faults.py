@@ -52,12 +52,13 @@ def read(path):
     run-up's lines sweep with the speed, and `ideal` cases have no bearing: both are
     left out. Raises ValueError if the file lacks the fault labels or the bearing force
     spectrum, or has no constant-speed bearing case with a defect."""
-    with open_study(path) as ds:
+    with open_study(path) as full:
         needed = ["fault", "defect_race", f"{CHANNEL}_spectrum"]
-        missing = [name for name in needed if name not in ds]
+        missing = [name for name in needed if name not in full]
         if missing:
             raise ValueError(f"{path}: no {', '.join(missing)}: expected a file of studies/faults.yaml "
                              f"(a study with defects whose `spectra.channels` include {CHANNEL})")
+        ds = full[[name for name in full.data_vars if full[name].dims == ("case",)] + [f"{CHANNEL}_spectrum"]].load()
         freq = ds["frequency"].values
         cases = []
         for k in range(ds.sizes["case"]):

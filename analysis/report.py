@@ -123,10 +123,10 @@ def restrict(ds, selections):
                 shown = value if isinstance(value, str) else f"{value:g}"
                 raise ValueError(f"--select {name}={shown}: no case has {name} {shown}; "
                                  f"the file has {_values_text(ds, name)}")
+        others = {name: select_cases(ds, **{k: v for k, v in params.items() if k != name}) for name in params}
+        found = "; ".join(f"{name} is {_values_text(ds, name, rows)}" for name, rows in others.items())
         raise ValueError(f"--select {' '.join(selections)}: no case matches them all; among the cases "
-                         "each of the others selects, " + "; ".join(
-                             f"{name} is {_values_text(ds, name, select_cases(ds, **{k: v for k, v in params.items() if k != name}))}"
-                             for name in params))
+                         f"the other selections keep, {found}")
     return ds.isel(case=cases)
 
 
@@ -222,21 +222,54 @@ def metric_axes(axes):
     return ordered[0], (ordered[1] if len(ordered) > 1 else None)
 
 
+def panel_keys(ds):
+    """The parameters a panel group fixes: location, rpm, waviness_amplitude and the
+    other grid axes except ball_count."""
+    return list(GROUP_KEYS) + [a for a in grid_axes(ds) if a not in GROUP_KEYS and a != "ball_count"]
+
+
+def _params(ds, case, keys):
+    """({key: value} of `case`, the same as a hashable tuple with NaN as the text 'nan'
+    so that NaN groups with NaN: a parameter not applicable, or differing per race)."""
+    params = {}
+    for key in keys:
+        value = ds[key].values[case]
+        params[key] = str(value) if ds[key].dtype.kind in "USO" else float(value)
+    same = tuple((k, "nan" if isinstance(v, float) and np.isnan(v) else v) for k, v in params.items())
+    return params, same
+
+
 def panel_groups(ds, cases):
     """[(parameters, ball counts)]: the distinct combinations of location, rpm,
     waviness_amplitude and the other grid axes (except ball_count) among `cases`,
     in file order, with the ball counts each has."""
-    keys = list(GROUP_KEYS) + [a for a in grid_axes(ds) if a not in GROUP_KEYS and a != "ball_count"]
+    keys = panel_keys(ds)
     groups = {}
     for case in cases:
-        params = {}
-        for key in keys:
-            value = ds[key].values[case]
-            params[key] = str(value) if ds[key].dtype.kind in "USO" else float(value)
-        # NaN (a parameter not applicable, or differing per race) groups with NaN.
-        same = tuple((k, "nan" if isinstance(v, float) and np.isnan(v) else v) for k, v in params.items())
+        params, same = _params(ds, case, keys)
         groups.setdefault(same, (params, set()))[1].add(int(ds["ball_count"].values[case]))
     return [(params, sorted(counts)) for params, counts in groups.values()]
+
+
+def cases_repeat(count):
+    """'case without a defect repeats' or 'cases without a defect repeat', for `count`."""
+    return "case without a defect repeats" if count == 1 else "cases without a defect repeat"
+
+
+def healthy_repeats(ds, cases):
+    """Positions among `cases` of the cases without a defect whose panel parameters and
+    ball count repeat an earlier such case's (after `mark_healthy` they differ only in
+    the zero-depth defect, which is no defect: the same run)."""
+    keys = panel_keys(ds) + ["ball_count"]
+    healthy = no_defect(ds)
+    seen, out = set(), []
+    for case in cases:
+        if healthy[case]:
+            same = _params(ds, case, keys)[1]
+            if same in seen:
+                out.append(int(case))
+            seen.add(same)
+    return out
 
 
 def slug(ds, params):
@@ -256,8 +289,14 @@ def render_metrics(ds, cases, outdir, index, dpi):
         index.note("No grid axis varies among the bearing cases: no metrics view.")
         return
     if repeated:
-        index.note(f"{repeated} cases without a defect repeat another's grid values: the first is shown.")
+        index.note(f"{repeated} {cases_repeat(repeated)} another's grid values: the first is shown.")
     x_axis, y_axis = metric_axes(axes)
+    healthy_note = ""
+    if "defect_race" in axes and no_defect(bearing).any():
+        healthy_note = "; defect_race none: the bearing without a defect"
+        repeated_over = [a for a in axes if a in DEFECT_PARAMETERS and a != "defect_race"]
+        if repeated_over:
+            healthy_note += f", shown at every {' and '.join(repeated_over)}"
     for channel in figures.PANEL_CHANNELS:
         for kind in METRIC_KINDS:
             metric = f"{channel}_{kind}"
@@ -272,8 +311,7 @@ def render_metrics(ds, cases, outdir, index, dpi):
                 continue
             index.figure(out, f"{metric} ({figures.unit_text(ds, metric)}) of the bearing cases {shape}, "
                               "transient ≤ t < duration; facets: the other grid axes; blank: failed or not run"
-                              + ("; defect_race none: the bearing without a defect, in every facet." if
-                                 "defect_race" in axes and (no_defect(bearing)).any() else "."))
+                              + healthy_note + ".")
 
 
 def render_group(ds, params, counts, outdir, index, channels, dpi):
@@ -319,6 +357,11 @@ def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
         index.note("The study has no successful case with a bearing (crank_ground or crank_rod): "
                    "no time-series panels or spectra.")
         return
+    repeats = healthy_repeats(ds, cases)
+    if repeats:
+        index.note(f"{len(repeats)} {cases_repeat(len(repeats))} another's parameters: the first is shown.")
+        ds = ds.isel(case=[int(c) for c in cases if int(c) not in repeats])
+        cases = np.arange(ds.sizes["case"])
     groups = panel_groups(ds, cases)
     profiled = [params for params, _ in groups if not np.isfinite(params["rpm"])]
     if profiled:

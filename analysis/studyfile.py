@@ -83,9 +83,11 @@ def open_study(path):
 
     The variables keep the file's units (`units` attribute of each). Close the
     dataset (or use it in a `with` block) when done; `.load()` reads it all. Raises
-    StudyFileError if `path` does not exist or is not an HDF5 file.
+    StudyFileError if the path `path` does not exist or is not an HDF5 file (an open
+    file object is passed to xarray as it is).
     """
-    check_study_file(path)
+    if isinstance(path, (str, os.PathLike)):
+        check_study_file(path)
     return xr.open_dataset(path, engine="h5netcdf")
 
 

@@ -156,7 +156,10 @@ def test_the_diagnosis_study_shows_every_figure(diagnosis_report, assert_png):
     section = diagnosis_section(index)
     assert linked_images(section) == DIAGNOSIS_FIGURES
     assert "not shown" not in section and "*" not in section
-    assert "over fault × condition" in section
+    # The healthy cases (defect_race none) complete the grid: defect_race × speed_from tells
+    # every case apart.
+    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed_from" in section
+    assert "indicators of accelerometer (docs/model.md §7.7) over defect_race × speed_from" in section
 
 
 def fault_cases(ds, rpm):

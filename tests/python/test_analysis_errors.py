@@ -137,7 +137,8 @@ def test_select_that_matches_nothing_lists_the_values(small, tmp_path):
                           cwd=REPO, capture_output=True, text=True)
     assert_one_line_error(done, "report: ", "--select rpm=301", "no case has rpm 301", "the file has 300")
     with open_study(small) as ds:
-        with pytest.raises(ValueError, match="no case has location nowhere; the file has crank_ground, crank_rod, ideal"):
+        with pytest.raises(ValueError,
+                           match="no case has location nowhere; the file has crank_ground, crank_rod, ideal"):
             report.restrict(ds, ["location=nowhere"])
         # Each alone matches cases (a NaN metric: the ideal cases'), together none.
         with pytest.raises(ValueError, match="no case matches them all"):

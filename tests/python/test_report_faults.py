@@ -52,6 +52,23 @@ cases:
 """
 
 
+DEPTHS = """name: depths
+duration: 0.15
+sample_rate: 5000
+transient: "0.05 s"
+rpm: 600
+effects: [clearance, damping, defects]
+bearing:
+  clearance: "10 um"
+  damping: 300
+  defects: [{race: outer, angle: "0 deg", width: "1 mm", depth: "20 um", profile: flat}]
+grid:
+  defect_depth: ["0 um", "20 um"]
+  defect_race: [outer, inner]
+  defect_width: ["0.5 mm", "2 mm"]
+"""
+
+
 @pytest.fixture(scope="module")
 def path(tmp_path_factory):
     return run_grid(tmp_path_factory.mktemp("faults"), "minifaults", GRID)
@@ -99,7 +116,8 @@ def test_the_metrics_grid_shows_the_healthy_bearing_in_the_none_row_of_every_wid
     # The defects' cells are their own cases' values.
     k = next(k for k in range(ds.sizes["case"]) if str(ds["fault"].values[k]) == "inner"
              and ds["defect_width"].values[k] == 0.002 and ds["speed_to"].values[k] == 600)
-    cell = metric.sel(location="crank_ground", defect_race="inner", defect_width=0.002, speed_from=600.0, speed_to=600.0)
+    cell = metric.sel(location="crank_ground", defect_race="inner", defect_width=0.002,
+                      speed_from=600.0, speed_to=600.0)
     assert float(cell) == float(ds["bearing_force_rms_deviation"].values[k])
 
 
@@ -160,6 +178,28 @@ def test_the_report_never_shows_the_healthy_cases_as_a_1_mm_defect(rendered):
     outdir, index = rendered
     metrics = index.split("## Vibration metrics")[1].split("## Time series")[0]
     assert len(re.findall(r"\((metrics_[^)]+\.png)\)", metrics)) == 6
-    assert "defect_race none: the bearing without a defect, in every facet" in metrics
+    assert "defect_race none: the bearing without a defect, shown at every defect_width." in metrics
     assert "1 mm" not in index and "defect_width1mm" not in index
     assert "defect_race none, defect_width n/a" in index  # the healthy bearing's panels
+
+
+def test_a_depth_axis_with_zero_shows_its_healthy_cases_once(tmp_path):
+    """`defect_depth: [0, 20 um]` as an axis: the four zero-depth cases are one healthy
+    bearing, shown once in the `none` row (not four times as outer/inner defects)."""
+    path = run_grid(tmp_path, "depths", DEPTHS)
+    with open_study(path) as ds:
+        view, repeated = report.healthy_beside_defects(report.mark_healthy(ds.load()))
+        assert repeated == 3
+        grid = unstack(view)
+        assert sorted(grid["defect_race"].values.tolist()) == ["inner", "none", "outer"]
+        assert grid["defect_depth"].values.tolist() == [2e-5]
+        first_healthy = int(np.flatnonzero(ds["fault"].values == "none")[0])
+        cells = grid["crank_moment_rms_deviation"].sel(defect_race="none").values
+        np.testing.assert_array_equal(cells.ravel(), ds["crank_moment_rms_deviation"].values[first_healthy])
+    outdir = tmp_path / "report"
+    index = report.report(path, outdir, channels=["crank_moment"], dpi=40).read_text(encoding="utf-8")
+    assert "not shown" not in index
+    assert index.count("3 cases without a defect repeat another's") == 2  # the metrics and the panels
+    series = index.split("## Time series")[1].split("## Diagnosis")[0]
+    panels = re.findall(r"\((panels_[^)]+\.png)\)", series)
+    assert len(panels) == 5 and sum("_none_" in name for name in panels) == 1, panels
