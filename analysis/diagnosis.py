@@ -93,17 +93,28 @@ def window_series(ds, name, case):
     return ds["time"].values[mask], np.asarray(ds[name].values[case], dtype=float)[mask]
 
 
+def band_analytic(spectrum, freqs, n, low, high):
+    """The analytic signal of the band low ≤ f ≤ high (Hz) from the real FFT
+    `spectrum` (at `freqs`) of `n` samples: the band's bins doubled, but DC and (even
+    n) Nyquist kept once, as they have no negative-frequency twin (docs/model.md §7.4
+    step 2). Returns (z, whether the band holds a bin)."""
+    weight = np.full(len(freqs), 2.0)
+    weight[0] = 1.0
+    if n % 2 == 0:
+        weight[-1] = 1.0
+    keep = (freqs >= low) & (freqs <= high)
+    z = np.zeros(n, dtype=complex)
+    z[: len(freqs)][keep] = weight[keep] * spectrum[keep]
+    return np.fft.ifft(z), keep.any()
+
+
 def analytic_signal(x, sample_rate, low, high):
     """The analytic signal of the band low ≤ f ≤ high (Hz) of the samples `x`, their
     mean removed (docs/model.md §7.4 steps 1–3: a brick wall on the FFT bins)."""
     y = np.asarray(x, dtype=float) - np.mean(x)
     n = len(y)
-    spectrum = np.fft.rfft(y)
     freqs = np.fft.rfftfreq(n, 1.0 / sample_rate)
-    z = np.zeros(n, dtype=complex)
-    keep = (freqs >= low) & (freqs <= high)
-    z[: len(freqs)][keep] = 2 * spectrum[keep]
-    return np.fft.ifft(z)
+    return band_analytic(np.fft.rfft(y), freqs, n, low, high)[0]
 
 
 def envelope_spectrum(x, sample_rate, low, high):
@@ -162,12 +173,10 @@ def kurtogram(x, sample_rate):
         values = []
         for i in range(m):
             low, high = i * nyquist / m, (i + 1) * nyquist / m
-            keep = (freqs >= low) & (freqs <= high)
-            z = np.zeros(n, dtype=complex)
-            z[: len(freqs)][keep] = 2 * spectrum[keep]
-            power = np.abs(np.fft.ifft(z)) ** 2
+            z, any_bin = band_analytic(spectrum, freqs, n, low, high)
+            power = np.abs(z) ** 2
             mean = power.mean()
-            value = np.mean(power**2) / mean**2 - 2 if keep.any() and mean > 0 else math.nan
+            value = np.mean(power**2) / mean**2 - 2 if any_bin and mean > 0 else math.nan
             values.append(value)
             if value > best[2] or (math.isnan(best[2]) and math.isfinite(value)):
                 best = (level, (low, high), value)

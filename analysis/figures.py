@@ -196,10 +196,15 @@ def _marks(ds, case):
         ("ball pass outer N_b f_out", f.ball_pass_outer, "-."),
         ("ball pass inner N_b f_in", f.ball_pass_inner, "-."),
     ]
-    if float(ds["outer_waviness_amplitude"].values[case]) != 0:
-        marks.append(("outer waviness N_o f_out", f.waviness_outer, "--"))
-    if float(ds["inner_waviness_amplitude"].values[case]) != 0:
-        marks.append(("inner waviness N_i f_in", f.waviness_inner, "--"))
+    for race, whirl, passing, label in (
+        ("outer", f.whirl_outer, f.waviness_outer, "N_o f_out"),
+        ("inner", f.whirl_inner, f.waviness_inner, "N_i f_in"),
+    ):
+        if float(ds[f"{race}_waviness_amplitude"].values[case]) != 0:
+            if math.isfinite(whirl):
+                marks.append((f"{race} waviness whirl", whirl, "--"))
+            else:
+                marks.append((f"{race} waviness {label}", passing, "--"))
     return marks
 
 
@@ -229,7 +234,8 @@ def spectra(
     the file's window `spectrum_window`) per ball count, the ideal mechanism's spectrum
     (the same window) in grey, and the
     characteristic frequencies of docs/model.md §7.3 marked (see analysis.frequencies):
-    cage f_c, ball pass N_b f_out and N_b f_in, waviness N_o f_out and N_i f_in.
+    cage f_c, ball pass N_b f_out and N_b f_in, and each wavy race's whirl (or N_o f_out,
+    N_i f_in where the balls cancel it).
     Both axes are logarithmic (frequency from the first bin above 0 Hz).
 
     For crank_rod the inner race (on the rod) is taken at its mean speed over a

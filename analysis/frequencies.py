@@ -4,8 +4,10 @@ Rolling without slip, the cage turns at ω_m = (ω_i d_i + ω_o d_o)/(d_i + d_o)
 (rad/s) with ω_i, ω_o the mean speeds of the inner and outer race. Balls pass a
 point of the inner race at f_in = (ω_i − ω_m)/2π and of the outer race at
 f_out = (ω_m − ω_o)/2π (Hz). Marked in spectra: the cage f_c = ω_m/2π, the ball
-pass frequencies N_b f_out and N_b f_in, and the waviness excitations N_o f_out and
-N_i f_in. All frequencies are returned as absolute values in Hz.
+pass frequencies N_b f_out and N_b f_in, and per wavy race the journal's whirl
+|(N ± 1) ω_m − N ω_race|/2π when N_b divides N ± 1 (docs/model.md §7.3: other orders
+cancel among equally loaded balls), else the rate N f_out or N f_in at which the
+waviness passes one ball. All frequencies are returned as absolute values in Hz.
 
 Mean race speeds per bearing location (ω_crank = 2π rpm/60 rad/s):
 - crank_ground: inner race on the crank, ω_i = ω_crank; outer race on the ground, ω_o = 0.
@@ -36,7 +38,13 @@ class BearingFrequencies:
     ball_pass_outer: float
     ball_pass_inner: float
     waviness_outer: float
+    """N_o f_out: the outer waviness passing one ball."""
     waviness_inner: float
+    """N_i f_in: the inner waviness passing one ball."""
+    whirl_outer: float
+    """The journal's whirl from the outer waviness, NaN when N_b divides neither N_o ± 1."""
+    whirl_inner: float
+    """The journal's whirl from the inner waviness, NaN when N_b divides neither N_i ± 1."""
 
 
 def race_speeds(location, rpm):
@@ -48,6 +56,17 @@ def race_speeds(location, rpm):
     if location == "crank_rod":
         return 0.0, omega_crank
     raise ValueError(f"no bearing at location {location!r}: use crank_ground or crank_rod")
+
+
+def waviness_whirl(order, ball_count, cage_speed, race_speed):
+    """|(N ± 1) ω_m − N ω_race| / 2π (Hz) for the N ± 1 that `ball_count` divides (the
+    first-order resultant of a waviness of order N over equally spaced balls,
+    docs/model.md §7.3), or NaN when it divides neither."""
+    n, balls = round(order), round(ball_count)
+    for m in (n + 1, n - 1):
+        if balls > 0 and m != 0 and m % balls == 0:
+            return abs(m * cage_speed - n * race_speed) / (2 * math.pi)
+    return math.nan
 
 
 def characteristic_frequencies(
@@ -68,6 +87,8 @@ def characteristic_frequencies(
         ball_pass_inner=ball_count * f_in,
         waviness_outer=outer_waviness_number * f_out,
         waviness_inner=inner_waviness_number * f_in,
+        whirl_outer=waviness_whirl(outer_waviness_number, ball_count, omega_m, omega_o),
+        whirl_inner=waviness_whirl(inner_waviness_number, ball_count, omega_m, omega_i),
     )
 
 
