@@ -560,6 +560,17 @@ fn accuracy_command(
     (methods, rtols): (&[String], &[f64]),
 ) -> Result<u8> {
     use studyrun::accuracy::{self, describe, ERROR_CHANNELS};
+    if let Some(twice) = rtols
+        .iter()
+        .enumerate()
+        .find_map(|(k, r)| rtols[..k].contains(r).then_some(r))
+    {
+        clap::Error::raw(
+            clap::error::ErrorKind::ValueValidation,
+            format!("--rtols: {twice:e} is given twice; give each rtol once\n"),
+        )
+        .exit();
+    }
     let study = load(grid, &limits)?;
     // The accuracy study keeps every case's reference run (all channels) to the end,
     // and each worker two more runs.

@@ -50,9 +50,8 @@ impl Sampling {
         if (intervals - intervals.round()).abs() > 1e-6 * intervals.max(1.0) {
             let n = intervals.round().max(1.0);
             // Ten significant digits: enough to land on a sample.
-            let nearby = |x: f64| {
-                crate::error::number(format!("{x:.9e}").parse::<f64>().unwrap_or(x))
-            };
+            let nearby =
+                |x: f64| crate::error::number(format!("{x:.9e}").parse::<f64>().unwrap_or(x));
             return Err(ParamError::new(
                 "duration",
                 self.duration,

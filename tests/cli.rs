@@ -453,6 +453,21 @@ fn accuracy_takes_the_callers_tolerances() {
             );
         }
     }
+    // A tolerance given twice would run twice: a usage error, before anything runs.
+    let out = studyrun(
+        dir.path(),
+        &[
+            "accuracy",
+            "acc.yaml",
+            "-o",
+            "twice.h5",
+            "--rtols",
+            "1e-4,3e-5,1e-4",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--rtols: 1e-4 is given twice"));
+    assert!(!dir.path().join("twice.h5").exists());
 }
 
 #[test]

@@ -668,6 +668,10 @@ fn repeated_axis_values_and_zip_rows_are_refused() {
             "rpm: 300\ncases: [{location: null}]\n",
             &["`cases[0].location`", "has no value"],
         ),
+        (
+            "effects: [clearance, damping, clearance]\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:4:31", "`effects[2]`", "`clearance` is listed twice"],
+        ),
         // Flow style names the field and shows the value whole.
         (
             "grid: {clearance: [.nan]}\n",
@@ -785,6 +789,10 @@ fn parser_errors_are_in_the_users_words() {
         (
             "rpm: 300\ncases: [{location: null}]\n",
             &["`cases[0].location`", "has no value"],
+        ),
+        (
+            "effects: [clearance, damping, clearance]\ngrid:\n  rpm: [300]\n",
+            &["r.yaml:4:31", "`effects[2]`", "`clearance` is listed twice"],
         ),
         // Flow style names the field and shows the value whole.
         (

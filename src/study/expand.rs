@@ -1523,6 +1523,13 @@ fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyError> {
                 ))
             }
         };
+        if *slot {
+            return Err(ctx.err(
+                Some(at(&name.referenced)),
+                &format!("effects[{k}]"),
+                format!("`{}` is listed twice; list each effect once", name.value),
+            ));
+        }
         *slot = true;
     }
     Ok(e)
