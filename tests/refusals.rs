@@ -858,6 +858,29 @@ fn parser_errors_are_in_the_users_words() {
     );
 }
 
+/// A path that holds no HDF5 file is named with what is there, on one line, for every
+/// command that reads study files.
+#[test]
+fn inputs_that_are_no_hdf5_file_say_what_they_are() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "grid.yaml", TINY);
+    std::fs::create_dir(dir.path().join("folder")).unwrap();
+    for (path, what) in [
+        ("missing.h5", "missing.h5 does not exist"),
+        ("folder", "folder is a directory, not a study file"),
+        (
+            "grid.yaml",
+            "grid.yaml is not an HDF5 file (no HDF5 signature)",
+        ),
+    ] {
+        for args in [&["inspect", path][..], &["merge", "out.h5", path]] {
+            let err = refused(&studyrun(dir.path(), args), 1, &[what]);
+            assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        }
+    }
+    assert!(!dir.path().join("out.h5").exists());
+}
+
 #[test]
 fn zero_contact_stiffness_is_refused() {
     // K = 0 gave 1.3 mm of eccentricity with status ok: no bearing at all.

@@ -60,6 +60,14 @@ pub enum StudyFileError {
         /// What does not fit.
         reason: String,
     },
+    /// The path holds no HDF5 file: nothing, a directory, or a file of another kind.
+    #[error("{path} {reason}")]
+    NotHdf5 {
+        /// The path given.
+        path: PathBuf,
+        /// What is there instead: `does not exist`, `is a directory`, ….
+        reason: String,
+    },
     /// The file is not a study file of this version, or its content is inconsistent.
     #[error("{path}: variable `{variable}`: not a readable study file: {reason}")]
     Format {

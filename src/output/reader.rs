@@ -99,7 +99,24 @@ impl StudyReader {
     /// [`StudyReader::open`] without the check in a child process.
     pub(super) fn open_unchecked(path: &Path) -> Result<Self, StudyFileError> {
         let path = path.to_owned();
-        let file = File::open(&path).at(&path, "/")?;
+        let not_hdf5 = |reason: String| StudyFileError::NotHdf5 {
+            path: path.clone(),
+            reason,
+        };
+        match std::fs::metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Err(not_hdf5("does not exist".into()))
+            }
+            Err(e) => return Err(not_hdf5(format!("cannot be read: {e}"))),
+            Ok(m) if m.is_dir() => return Err(not_hdf5("is a directory, not a study file".into())),
+            Ok(_) => {}
+        }
+        let file = match File::open(&path) {
+            Err(e) if e.to_string().contains("file signature not found") => {
+                return Err(not_hdf5("is not an HDF5 file (no HDF5 signature)".into()))
+            }
+            opened => opened.at(&path, "/")?,
+        };
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
         let messages = read_messages(&rows.error_message, layout.n_cases(), &path)?;
