@@ -344,6 +344,18 @@ fn a_forced_run_killed_on_the_way_leaves_the_old_result() {
         before,
         "the old result is whole"
     );
+    // `inspect` says what the journal beside each file means.
+    for (file, note) in [
+        ("out.h5", "holds an interrupted run that replaces it"),
+        ("out.h5.partial", "interrupted: the partial file of out.h5"),
+    ] {
+        let out = studyrun(d, &["inspect", file]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success() && text.contains(note),
+            "{file}: {text}"
+        );
+    }
     let resumed = studyrun(d, &["long.yaml", "-o", "out.h5", "--resume", "-q"]);
     assert!(
         resumed.status.success(),

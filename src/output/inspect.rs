@@ -74,6 +74,9 @@ pub fn inspect(path: &Path) -> Result<String> {
         count(Status::Failed),
         count(Status::Pending)
     )?;
+    if let Some(note) = interrupted_run(path) {
+        writeln!(out, "run:      {note}")?;
+    }
     if !l.replicates.is_empty() {
         writeln!(
             out,
@@ -126,4 +129,33 @@ pub fn inspect(path: &Path) -> Result<String> {
         )?;
     }
     Ok(out)
+}
+
+/// A note when `path` belongs to an interrupted run: it is a run's partial file (its
+/// finished cases are in the journal, not yet marked here), or a result file beside
+/// the journal of a run that will replace it.
+fn interrupted_run(path: &Path) -> Option<String> {
+    let name = path.to_str()?;
+    let (output, partial) = [".partial.resumed", ".partial"]
+        .iter()
+        .find_map(|suffix| name.strip_suffix(suffix))
+        .map_or((name, false), |output| (output, true));
+    let (journal, _) = super::side_paths(Path::new(output));
+    if !journal.is_file() {
+        return None;
+    }
+    Some(if partial {
+        format!(
+            "interrupted: the partial file of {output}, whose cases are marked done only when \
+             the run finishes; the journal {} records the finished ones, and \
+             `studyrun GRID -o {output} --resume` continues the run",
+            journal.display()
+        )
+    } else {
+        format!(
+            "the journal {} beside this file holds an interrupted run that replaces it when \
+             `--resume` finishes it",
+            journal.display()
+        )
+    })
 }
