@@ -27,6 +27,16 @@ def run_grid(directory, name, grid):
     return out
 
 
+def opened_run(tmp_path_factory, name, grid):
+    """Runs `grid` in a fresh temporary directory (`run_grid`) and yields its file open
+    in h5py: the body of a module-scoped fixture (`yield from opened_run(...)`)."""
+    import h5py
+
+    path = run_grid(tmp_path_factory.mktemp(name), name, grid)
+    with h5py.File(path, "r") as f:
+        yield f
+
+
 def text(value):
     """A text value or attribute as str (h5py gives variable-length strings as bytes)."""
     return value.decode() if isinstance(value, bytes) else str(value)

@@ -10,10 +10,9 @@ every dimension (replicates, whole revolutions, order spectra, envelope analysis
 Environment: STUDYRUN_BIN (the binary runs the study written here); else skip.
 """
 
-import h5py
 import pytest
 
-from study_run import run_grid
+from study_run import opened_run
 
 GRID = """name: layout
 duration: 0.25
@@ -30,9 +29,7 @@ grid:
 
 @pytest.fixture(scope="module")
 def f(tmp_path_factory):
-    path = run_grid(tmp_path_factory.mktemp("layout"), "layout", GRID)
-    with h5py.File(path, "r") as file:
-        yield file
+    yield from opened_run(tmp_path_factory, "layout", GRID)
 
 
 def dims(var):

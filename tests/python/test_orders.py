@@ -11,14 +11,14 @@ import math
 import sys
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
+from analysis.diagnosis import analytic_signal  # noqa: E402
 from analysis.frequencies import characteristic_frequencies  # noqa: E402
-from study_run import run_grid, text, window  # noqa: E402
+from study_run import opened_run, text, window  # noqa: E402
 
 RTOL = 1e-9
 
@@ -44,9 +44,7 @@ cases:
 
 @pytest.fixture(scope="module")
 def f(tmp_path_factory):
-    out = run_grid(tmp_path_factory.mktemp("orders"), "orders", GRID)
-    with h5py.File(out, "r") as h:
-        yield h
+    yield from opened_run(tmp_path_factory, "orders", GRID)
 
 
 def amplitude(x):
@@ -116,13 +114,7 @@ def resample(x, t, drive, revolutions, m):
 
 def squared_envelope(x, fs, low, high):
     """|z|² of the analytic signal in [low, high] with its mean removed (model.md §7.4)."""
-    n = len(x)
-    y_fft = np.fft.rfft(x - x.mean())
-    freqs = np.arange(n // 2 + 1) * fs / n
-    z = np.zeros(n, dtype=complex)
-    sel = (freqs >= low) & (freqs <= high)
-    z[: len(freqs)][sel] = 2 * y_fft[sel]
-    s = np.abs(np.fft.ifft(z)) ** 2
+    s = np.abs(analytic_signal(x, fs, low, high)) ** 2
     return s - s.mean()
 
 

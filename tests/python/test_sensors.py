@@ -10,13 +10,12 @@ Environment: STUDYRUN_BIN (the binary runs a small study written here); else ski
 
 import math
 
-import h5py
 import numpy as np
 import pytest
 from scipy.linalg import expm
 from scipy.signal import lsim
 
-from study_run import run_grid, window
+from study_run import opened_run, window
 
 RTOL = 1e-9
 
@@ -40,9 +39,7 @@ SENSORS = [
 
 @pytest.fixture(scope="module")
 def f(tmp_path_factory):
-    out = run_grid(tmp_path_factory.mktemp("sensors"), "sensors", GRID)
-    with h5py.File(out, "r") as h:
-        yield h
+    yield from opened_run(tmp_path_factory, "sensors", GRID)
 
 
 def by_lsim(u, t, fn, zeta):
