@@ -451,8 +451,8 @@ fn bad_damping_law_keys_are_refused_naming_the_field() {
     }
 }
 
-/// [`SliderCrank`] without its `accept_step`, the one hook the latching laws added
-/// to the integration: everything else is forwarded.
+/// [`SliderCrank`] without its `accept_step`, the one hook of the integration the
+/// latching laws use: everything else is forwarded.
 struct WithoutAccept(SliderCrank);
 
 impl OdeSystem for WithoutAccept {

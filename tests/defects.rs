@@ -235,7 +235,7 @@ fn zero_depth_is_no_defect_and_tiny_depths_converge_to_it() {
 }
 
 /// docs/model.md §3.8's ledger with a rounded defect on each surface (undamped,
-/// so nothing is dissipated): `W_driver = ΔKE + ΔV − ∫∂V/∂t dt`, where ∂V/∂t now
+/// so nothing is dissipated): `W_driver = ΔKE + ΔV − ∫∂V/∂t dt`, where ∂V/∂t
 /// holds the defect moving under the balls, closes to 1e-7 of the driver's work
 /// over two revolutions at rtol 1e-12.
 #[test]

@@ -716,7 +716,7 @@ fn case11_stiff_case_explicit_fails_cleanly_implicit_finishes() {
     }
 }
 
-/// The stiff case of case 11 and `tests/stiff_cases.rs`: K = 1e11 N/m^1.5 with a
+/// The stiff case of case 11 and `tests/stiffness.rs`: K = 1e11 N/m^1.5 with a
 /// 20 µm preload, damping `c` (N s/m) two-sided, no waviness, 300 rpm at crank_ground.
 pub(crate) fn stiff_case(damping: f64) -> CaseParams {
     let mut case = CaseParams::default();

@@ -1,4 +1,4 @@
-//! Hard inputs and hard cases (#23): every refusal of the `studyrun` command, each
+//! Hard inputs and hard cases: every refusal of the `studyrun` command, each
 //! with its exit code (2 invalid input, 1 refused operation), a message that names
 //! the field, the value and the rule, and no panic; bounded memory decided before
 //! anything runs; nothing replaced that is not ours; physically impossible results
@@ -17,8 +17,8 @@ use studyrun::simulate::{simulate, CaseOutput, CHANNELS};
 use studyrun::solve::Stats;
 use studyrun::study::Study;
 
-/// A refusal this slow would be doing the work it refuses; the real figures are
-/// milliseconds (see the report of #23), the bound is loose for loaded CI machines.
+/// A refusal this slow would be doing the work it refuses; refusals take
+/// milliseconds, the bound is loose for loaded CI machines.
 const FAST: Duration = Duration::from_secs(5);
 
 fn studyrun(dir: &Path, args: &[&str]) -> Output {
@@ -344,8 +344,8 @@ fn endless_and_oversized_grid_files_are_refused_before_parsing() {
 fn worker_counts_beyond_four_per_core_are_lowered_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "tiny.yaml", TINY);
-    // -j 100000 created a hundred thousand threads (minutes); now a warning and at
-    // most 4 per core.
+    // -j 100000 would start a hundred thousand threads (minutes of start-up): a
+    // warning, and at most 4 per core.
     let (out, took) = timed(dir.path(), &["tiny.yaml", "-j", "100000", "-q"]);
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
@@ -939,7 +939,7 @@ fn a_full_or_closed_stderr_or_stdout_is_not_a_panic() {
 fn an_impossible_eccentricity_fails_its_case_with_the_reason() {
     let dir = tempfile::tempdir().unwrap();
     // A 1000 kg slider at 3000 rpm: the journal is pushed 14 mm (more than a ball
-    // diameter) into the races; it was recorded as ok.
+    // diameter) into the races: an integration that finished, and a case to fail.
     write(
         dir.path(),
         "heavy.yaml",

@@ -1,5 +1,5 @@
 //! Helpers shared by `tests/hard_cases.rs`, `tests/properties.rs` and
-//! `tests/stiff_cases.rs`: one instrumented run of a slider-crank case with the energy
+//! `tests/stiffness.rs`: one instrumented run of a slider-crank case with the energy
 //! ledger on, on either model ([`Model`]: the Cartesian reference or the production
 //! minimal-coordinate model), and the checks every hard case makes (finite outputs,
 //! eccentricity within physical bounds, docs/model.md §4.4's energy balance,

@@ -1,8 +1,8 @@
 """Every `units` of a study file means the variable's quantity in each unit library that
 reads it: cf_units (UDUNITS-2, what CF tools and compliance-checker use), pint, and pint
 with cf_xarray's CF syntax. A library may reject a string; it must never read another
-quantity without a word (the stiffness written as `N m-1.5` was read by UDUNITS as
-`0.5 kg s-2`). The quantity of each variable is in cf_quantities.py.
+quantity without a word (UDUNITS reads the stiffness written as `N m-1.5` as
+`0.5 kg s-2`, so the file writes `N/m^(3/2)`, which it rejects). The quantity of each variable is in cf_quantities.py.
 
 Environment: STUDYRUN_SMOKE_FILE (the result of `studyrun studies/smoke.yaml`); unset:
 skip the file tests. STUDYRUN_MERGED_FILE, if set, is checked too.
