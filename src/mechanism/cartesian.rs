@@ -206,11 +206,6 @@ impl CartesianSliderCrank {
         self.location
     }
 
-    /// Initial positions `q(0)` of the ideal mechanism (m, rad).
-    pub fn initial_positions(&self) -> &[f64] {
-        &self.q0
-    }
-
     /// The integrator's initial state: the independent coordinates and their rates
     /// from the ideal mechanism (zero eccentricity, unless
     /// [`CartesianSliderCrank::with_initial_eccentricity`] moved the journal), plus

@@ -67,12 +67,6 @@ pub struct VibrationMetrics {
     pub bearing_force: Deviation,
 }
 
-/// The default start of the analysed window: one crank revolution, `60 / rpm` s,
-/// which skips the initial fall through the clearance (docs/model.md §9.3).
-pub fn default_window_start(rpm: f64) -> f64 {
-    60.0 / rpm
-}
-
 /// Metrics of `case` (a bearing case) against `ideal` (same speed and sampling),
 /// over the samples at the indices `window` (clamped to the series); only the
 /// window is read, and only its ideal force magnitudes are computed.

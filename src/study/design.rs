@@ -115,15 +115,6 @@ impl Method {
             _ => Some(samples),
         }
     }
-
-    /// The Sobol dimensions the method draws for `dims` parameters.
-    pub fn sobol_dimensions(self, dims: usize) -> usize {
-        match self {
-            Self::Saltelli => 2 * dims,
-            Self::Sobol => dims,
-            Self::Lhs | Self::Random => 0,
-        }
-    }
 }
 
 /// SplitMix64: a 64-bit state advanced by a constant, mixed on output.

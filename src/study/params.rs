@@ -536,8 +536,3 @@ pub fn axis_value(name: &str, case: &CaseParams) -> String {
 pub fn lookup(name: &str) -> Option<&'static ParamDef> {
     PARAMETERS.iter().find(|p| p.name == name)
 }
-
-/// The parameter whose validation field is `field` (for mapping errors back to YAML).
-pub fn by_field(field: &str) -> impl Iterator<Item = &'static ParamDef> + '_ {
-    PARAMETERS.iter().filter(move |p| p.field == field)
-}

@@ -241,15 +241,6 @@ pub fn run_model(
     }
 }
 
-/// Integrates `case` on the reference model with the energy ledger on.
-pub fn run_case(
-    case: &CaseParams,
-    settings: &SolverSettings,
-    times: &[f64],
-) -> Result<Run, SolveError> {
-    run_model(Model::Reference, case, settings, times)
-}
-
 /// Σ |offset| + Σ amplitudes of one race (m): the largest height its waviness reaches.
 pub fn race_extent(w: &RaceWaviness) -> f64 {
     w.offset.abs() + w.harmonics.iter().map(|h| h.amplitude).sum::<f64>()
