@@ -12,5 +12,5 @@ mod speed;
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
 pub use params::{CaseParams, Housing, Location, MechanismParams, Sample, GRAVITY};
-pub use slider_crank::{Energy, SliderCrank};
+pub use slider_crank::{Energy, SliderCrank, MAX_BAND};
 pub use speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};

@@ -660,6 +660,13 @@ impl SliderCrank {
         self.location
     }
 
+    /// The contact band `ε` (m) the bearing's contacts have: 0 until chattering
+    /// switches set it ([`OdeSystem::settle_chatter`], docs/model.md §8.8), at most
+    /// [`MAX_BAND`]; 0 for the ideal mechanism.
+    pub fn contact_band(&self) -> f64 {
+        self.bearing.as_ref().map_or(0.0, |w| w.regime.band())
+    }
+
     /// The initial state: journal at rest relative to the housing, centred (paper
     /// Table 3), `(0, 0, 0, 0)`, unless [`SliderCrank::with_initial_eccentricity`]
     /// moved it; empty for the ideal mechanism.
@@ -813,6 +820,14 @@ impl SliderCrank {
     }
 }
 
+/// Widest contact band (m) chattering switches get (docs/model.md §8.8): 1 pm, far
+/// below any deflection the contact law resolves (a 1 N ball load deflects the paper's
+/// ball by 0.2 µm) and above the chattering hops it removes (~1e-14 m). At loose
+/// tolerances the chatter watch can fire on ordinary contact sequences; a band of the
+/// tolerance's size (12 nm at rtol 1e-4) would then change the model by more than the
+/// integration errs.
+pub const MAX_BAND: f64 = 1e-12;
+
 impl OdeSystem for SliderCrank {
     fn dim(&self) -> usize {
         match (self.bearing.is_some(), self.ledger) {
@@ -925,7 +940,8 @@ impl OdeSystem for SliderCrank {
         if w.regime.recent_contact_changes() < CHATTER_SWITCHES {
             return false;
         }
-        w.regime.set_band(atol + rtol * y[0].abs().max(y[1].abs()));
+        w.regime
+            .set_band((atol + rtol * y[0].abs().max(y[1].abs())).min(MAX_BAND));
         true
     }
 }
