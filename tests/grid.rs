@@ -34,7 +34,7 @@ fn refused(text: &str) -> String {
 }
 
 #[test]
-fn the_issue_example_expands_in_file_order_first_axis_slowest() {
+fn the_documented_example_expands_in_file_order_first_axis_slowest() {
     let s = study(EXAMPLE);
     assert_eq!(s.cases.len(), 32);
     assert_eq!(
@@ -95,6 +95,27 @@ fn sdirk4_locates_events_when_asked() {
     assert!(!located("  method: sdirk4\n"));
     assert!(located("  method: sdirk4\n  locate_events: true\n"));
     assert!(!located("  method: tsit5\n  locate_events: false\n"));
+}
+
+#[test]
+fn the_stiffness_switch_can_be_turned_off_for_the_explicit_pairs() {
+    let grid = |solver: &str| {
+        format!("name: s\nduration: 0.2\nsample_rate: 1000\nsolver:\n{solver}grid:\n  rpm: [300]\n")
+    };
+    let switched = |solver: &str| study(&grid(solver)).solver.stiffness_switch;
+    assert!(switched("  method: dop853\n"));
+    assert!(!switched("  method: dopri5\n  stiffness_switch: false\n"));
+    assert!(switched("  method: tsit5\n  stiffness_switch: true\n"));
+    // SDIRK4 and RK4 have no switch to turn off: refused, not dropped.
+    for method in ["sdirk4", "rk4"] {
+        let text = grid(&format!("  method: {method}\n  stiffness_switch: false\n"));
+        let message = refused(&text);
+        assert!(
+            message.contains("`solver.stiffness_switch`")
+                && message.contains(&format!("not allowed with method {method}")),
+            "{message}"
+        );
+    }
 }
 
 #[test]

@@ -310,6 +310,9 @@ pub struct SolverSection {
     pub max_step: Option<S<Scalar>>,
     /// Whether the explicit pairs locate contact switches (default `true`).
     pub locate_events: Option<S<bool>>,
+    /// Whether the explicit pairs test for stiffness and continue on SDIRK4 (default
+    /// `true`).
+    pub stiffness_switch: Option<S<bool>>,
 }
 
 /// `spectra:` settings.

@@ -2127,10 +2127,8 @@ fn solver(
     let method_name = s.method.as_ref().map_or("dop853", |m| m.value.as_str());
     let given =
         |v: &Option<S<Scalar>>| v.as_ref().map(|v| (at(&v.referenced), v.value.to_string()));
-    let events = s
-        .locate_events
-        .as_ref()
-        .map(|v| (at(&v.referenced), v.value.to_string()));
+    let flag = |v: &Option<S<bool>>| v.as_ref().map(|v| (at(&v.referenced), v.value.to_string()));
+    let (events, switch) = (flag(&s.locate_events), flag(&s.stiffness_switch));
     let (ignored, takes) = match method {
         Method::Rk4 { .. } => (
             vec![
@@ -2138,12 +2136,17 @@ fn solver(
                 ("atol", given(&s.atol)),
                 ("max_step", given(&s.max_step)),
                 ("locate_events", events),
+                ("stiffness_switch", switch),
             ],
             "a fixed `step` (s)",
         ),
+        Method::Sdirk4 { .. } => (
+            vec![("step", given(&s.step)), ("stiffness_switch", switch)],
+            "`rtol`, `atol`, `max_step` and `locate_events`",
+        ),
         _ => (
             vec![("step", given(&s.step))],
-            "`rtol`, `atol`, `max_step` and `locate_events`",
+            "`rtol`, `atol`, `max_step`, `locate_events` and `stiffness_switch`",
         ),
     };
     if let Some((field, Some((place, value)))) = ignored.into_iter().find(|(_, v)| v.is_some()) {
@@ -2156,6 +2159,9 @@ fn solver(
     let mut settings = SolverSettings::new(method);
     if let Some(l) = &s.locate_events {
         settings.locate_events = l.value;
+    }
+    if let Some(l) = &s.stiffness_switch {
+        settings.stiffness_switch = l.value;
     }
     if let Some(m) = &s.max_steps {
         if m.value == 0 {
