@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use crate::signal::metrics::{vibration_metrics, VibrationMetrics};
 use crate::signal::replicates::predictability_horizon;
 use crate::simulate::{simulate, CaseOutput};
-use crate::solve::{Method, SolverSettings};
+use crate::solve::{Method, SolverSettings, MAX_RTOL};
 use crate::study::Study;
 
 pub use crate::signal::replicates::HORIZON_THRESHOLD;
@@ -92,15 +92,40 @@ fn ladder(pairs: &[(f64, f64)], sdirk4: &[(f64, f64)]) -> Vec<Method> {
     ladder
 }
 
-/// Whether `rtol` can be measured against the reference: finite, below 1 and above the
-/// check run's rtol (the reference is validated only to there).
+/// Whether `rtol` can be measured against the reference and set in a grid file:
+/// finite, below [`MAX_RTOL`] and above the check run's rtol (the reference is
+/// validated only to there).
 pub fn check_rtol(rtol: f64) -> Result<(), String> {
-    if rtol.is_finite() && rtol > CHECK_RTOL && rtol < 1.0 {
+    if rtol.is_finite() && rtol > CHECK_RTOL && rtol < MAX_RTOL {
         Ok(())
     } else {
         Err(format!(
-            "rtol {rtol:e} is outside what the accuracy study can judge: it must be above {CHECK_RTOL:e} (the reference's check run) and below 1"
+            "rtol {rtol:e} is outside what the accuracy study can judge: it must be above {CHECK_RTOL:e} (the reference's check run) and below {MAX_RTOL} (the grid file's limit)"
         ))
+    }
+}
+
+/// Whether a grid file could run `method` on samples `spacing` s apart: an RK4 step
+/// at most the spacing (the grid file refuses longer ones), any adaptive method.
+pub fn runnable(method: &Method, spacing: f64) -> bool {
+    match *method {
+        Method::Rk4 { step } => step <= spacing * (1.0 + 1e-9),
+        _ => true,
+    }
+}
+
+/// A method's setting as the tables show it: `1e-8`, `2e-5`, or with the digits it
+/// needs (`1.1e-10`).
+pub fn setting_label(setting: f64) -> String {
+    let short = format!("{setting:.0e}");
+    if short
+        .parse::<f64>()
+        .is_ok_and(|v| (v - setting).abs() <= 1e-12 * setting.abs())
+    {
+        short
+    } else {
+        let rounded: f64 = format!("{setting:.3e}").parse().unwrap_or(setting);
+        format!("{rounded:e}")
     }
 }
 
@@ -516,4 +541,29 @@ pub fn write_file(
     w.finish()?;
     std::fs::rename(&partial, path)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_read_as_written_and_only_runnable_ones_run() {
+        assert_eq!(setting_label(1e-8), "1e-8");
+        assert_eq!(setting_label(2e-5), "2e-5");
+        assert_eq!(setting_label(1.1e-10), "1.1e-10");
+        assert_eq!(setting_label(5.25e-3), "5.25e-3");
+        // At 20 kHz (50 µs apart) RK4's 80 µs step is one the grid file refuses.
+        let spacing = 1.0 / 20_000.0;
+        let rk4: Vec<f64> = default_ladder()
+            .iter()
+            .filter(|m| runnable(m, spacing))
+            .filter_map(|m| match *m {
+                Method::Rk4 { step } => Some(step),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(rk4, [40e-6, 20e-6, 10e-6, 5e-6]);
+        assert!(check_rtol(0.05).is_ok() && check_rtol(0.1).is_err() && check_rtol(0.5).is_err());
+    }
 }

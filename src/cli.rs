@@ -559,7 +559,7 @@ fn accuracy_command(
     force: bool,
     (methods, rtols): (&[String], &[f64]),
 ) -> Result<u8> {
-    use studyrun::accuracy::{self, describe, ERROR_CHANNELS};
+    use studyrun::accuracy::{self, describe, setting_label, ERROR_CHANNELS};
     if let Some(twice) = rtols
         .iter()
         .enumerate()
@@ -610,6 +610,9 @@ fn accuracy_command(
     if !methods.is_empty() {
         ladder.retain(|m| methods.iter().any(|name| name == describe(m).0));
     }
+    // Only settings a grid file could run: RK4 steps up to the sample spacing.
+    let spacing = 1.0 / study.sampling.sample_rate;
+    ladder.retain(|m| accuracy::runnable(m, spacing));
     say!(
         "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
         ladder.len(),
@@ -639,9 +642,10 @@ fn accuracy_command(
         for m in ms.iter().filter(|m| m.case == r.case) {
             let (name, setting) = describe(&m.method);
             match &m.error {
-                Some(e) => out!("| {name} | {setting:.0e} | failed: {e} |")?,
+                Some(e) => out!("| {name} | {} | failed: {e} |", setting_label(setting))?,
                 None => out!(
-                    "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.3} | {} | {} | {} |",
+                    "| {name} | {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.3} | {} | {} | {} |",
+                    setting_label(setting),
                     m.max_error[0], m.rms_error[0], m.metric_error[0], m.metric_error[1], m.metric_error[2], m.wall_time, m.steps, m.rejected, m.rhs_evals
                 )?,
             }
@@ -659,7 +663,8 @@ fn accuracy_command(
         errs.sort_by(f64::total_cmp);
         let (name, setting) = describe(method);
         out!(
-            "| {name} | {setting:.0e} | {:.1e} | {:.1e} | {:.2} | {} |",
+            "| {name} | {} | {:.1e} | {:.1e} | {:.2} | {} |",
+            setting_label(setting),
             errs.last().copied().unwrap_or(f64::NAN),
             errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN),
             rows.iter().map(|m| m.wall_time).sum::<f64>(),

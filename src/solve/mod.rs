@@ -77,6 +77,13 @@ pub trait OdeSystem {
 /// Relative tolerance of the default integrator and of a grid's `solver` block that
 /// names none (dimensionless).
 pub const DEFAULT_RTOL: f64 = 1e-8;
+
+/// The loosest relative tolerance a grid file or `accuracy --rtols` takes (not
+/// included): at 10 % an adaptive method integrates nothing worth a study.
+pub const MAX_RTOL: f64 = 0.1;
+
+/// The tightest relative tolerance a grid file takes: below it float64 cannot follow.
+pub const MIN_RTOL: f64 = 1e-14;
 /// Absolute tolerance of the default integrator and of a grid's `solver` block that
 /// names none (state units: m and m/s).
 pub const DEFAULT_ATOL: f64 = 1e-12;

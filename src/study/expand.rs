@@ -32,7 +32,7 @@ use crate::signal::revolutions::revolution_count;
 use crate::signal::sensor::{Sensor, CLEAN_SUFFIX};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
-use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL};
+use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL, MAX_RTOL, MIN_RTOL};
 
 /// Which effects a study simulates; anything off is not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -2074,10 +2074,11 @@ fn solver(
         &s.rtol,
         rtol,
         "solver.rtol",
-        (1e-14..0.1).contains(&rtol),
-        "a relative tolerance > 0, from 1e-14 up to (not including) 0.1; 1e-6 to 1e-10 \
-         are usual"
-            .into(),
+        (MIN_RTOL..MAX_RTOL).contains(&rtol),
+        format!(
+            "a relative tolerance > 0, from {MIN_RTOL:e} up to (not including) {MAX_RTOL}; \
+             1e-6 to 1e-10 are usual"
+        ),
     )?;
     let atol = positive(
         &s.atol,
