@@ -698,9 +698,9 @@ fn step_budget_counts_and_stops() {
     .unwrap_err();
     assert_eq!(
         err,
-        SolveError::StepBudgetExhausted {
-            t: 0.0,
-            steps: 0,
+        SolveError::StepBudgetTooSmall {
+            step: 0.01,
+            needed: 100,
             max_steps: 99
         }
     );

@@ -601,9 +601,9 @@ where
 {
     let steps = ((p.t_end - p.t0) / step - STEP_COUNT_SLACK).ceil().max(1.0);
     if steps > p.max_steps as f64 {
-        return Err(SolveError::StepBudgetExhausted {
-            t: p.t0,
-            steps: 0,
+        return Err(SolveError::StepBudgetTooSmall {
+            step,
+            needed: steps.min(u64::MAX as f64) as u64,
             max_steps: p.max_steps,
         });
     }

@@ -297,6 +297,16 @@ pub enum SolveError {
         /// The budget.
         max_steps: u64,
     },
+    /// A fixed-step run needs more steps than the budget allows; nothing was run.
+    #[error("the fixed step {step} s needs {needed} steps to reach the end, more than max_steps = {max_steps}")]
+    StepBudgetTooSmall {
+        /// The fixed step (s).
+        step: f64,
+        /// Steps the run needs.
+        needed: u64,
+        /// The budget.
+        max_steps: u64,
+    },
     /// The state became NaN or infinite.
     #[error("non-finite state at t = {t} s (component {index})")]
     NonFinite {
@@ -345,7 +355,8 @@ mod validate;
 ///   `f` keeps failing for an adaptive method until its step size underflows (a
 ///   trial stage the model cannot evaluate is first retried with a step cut by 10).
 /// * [`SolveError::StepBudgetExhausted`] after `settings.max_steps` steps (accepted
-///   plus rejected); for [`Method::Rk4`] before starting, if the run needs more.
+///   plus rejected); [`SolveError::StepBudgetTooSmall`] for [`Method::Rk4`] before
+///   starting, if the run needs more.
 /// * [`SolveError::StepSizeTooSmall`] when an adaptive step falls below `16 ε |t|`.
 /// * [`SolveError::NonFinite`] when the state of [`Method::Rk4`] (or an SDIRK4
 ///   Jacobian) becomes NaN or infinite; the adaptive methods instead reject such
