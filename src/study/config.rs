@@ -1,5 +1,11 @@
 //! The serde mirror of a grid file: what the YAML may contain, with the source
 //! location of every value kept for error messages. Unknown keys are refused.
+//!
+//! A field is named exactly as its key. Where a struct allows fields without a doc
+//! comment, the key's unit, default and meaning are in docs/grid-file.md's tables,
+//! which `tests/docs.rs` checks against this mirror and the parameter table
+//! ([`crate::study::params::PARAMETERS`]); a value is a number in that unit or a
+//! string with a unit (docs/grid-file.md, Units).
 
 use indexmap::IndexMap;
 use serde::Deserialize;
@@ -134,17 +140,24 @@ pub enum CaseValue {
 /// file (it may sit inside `cases:`, where serde keeps no inner places).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
 pub struct SpeedSection {
     /// `ramp`, `sine` or `table`.
     pub profile: String,
+    /// Ramp: the crank speed at `t = 0` (rev/min).
     pub from: Option<Scalar>,
+    /// Ramp: the crank speed reached at `over` (rev/min).
     pub to: Option<Scalar>,
+    /// Ramp: the time the ramp takes (s).
     pub over: Option<Scalar>,
+    /// Sine: the mean crank speed (rev/min).
     pub mean: Option<Scalar>,
+    /// Sine: the speed's amplitude about the mean (rev/min).
     pub amplitude: Option<Scalar>,
+    /// Sine: the speed's frequency (Hz).
     pub frequency: Option<Scalar>,
+    /// Table: the knots' times (s).
     pub time: Option<Vec<Scalar>>,
+    /// Table: the crank speed at each knot (rev/min).
     pub rpm: Option<Vec<Scalar>>,
 }
 
