@@ -359,6 +359,7 @@ fn run_command(args: RunArgs) -> Result<u8> {
         shard: args.shard,
         quiet: args.quiet,
     };
+    crate::interrupt::note_on_stop(&grid, &output, args.shard);
     let summary = run::run(&study, &opts)?;
     if summary.complete_before {
         say!(

@@ -1,6 +1,7 @@
 //! The `studyrun` command: see `studyrun --help`.
 
 mod cli;
+mod interrupt;
 
 fn main() -> std::process::ExitCode {
     // A closed pipe (`studyrun --dry-run grid.yaml | head`) ends the command quietly,

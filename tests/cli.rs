@@ -318,6 +318,62 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
+/// Ctrl-C, `kill` or a closed terminal stop a run as before (the process dies of the
+/// signal), after a note saying how to continue; `--resume` then finishes the run.
+#[test]
+fn a_signal_stops_a_run_with_a_note_on_how_to_resume() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let grid = "name: long\nduration: 0.4\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
+    write(d, "long.yaml", grid);
+    let journal = d.join("out.h5.journal");
+    for (signal, args) in [
+        (
+            libc::SIGTERM,
+            &["long.yaml", "-o", "out.h5", "-j", "1", "-q"][..],
+        ),
+        (
+            libc::SIGINT,
+            &["long.yaml", "-o", "out.h5", "-j", "1", "-q", "--resume"],
+        ),
+    ] {
+        let before = std::fs::metadata(&journal).map_or(0, |m| m.len());
+        let child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
+            .current_dir(d)
+            .args(args)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while std::fs::metadata(&journal).map_or(0, |m| m.len()) <= before + 1500 {
+            assert!(start.elapsed() < Duration::from_secs(120), "no progress");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        // SAFETY: signalling our own child process.
+        unsafe { libc::kill(child.id() as libc::pid_t, signal) };
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.signal(), Some(signal), "{:?}", out.status);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("stopped by a signal")
+                && stderr.contains("`studyrun long.yaml -o out.h5 --resume`"),
+            "{stderr}"
+        );
+        assert!(!d.join("out.h5").exists());
+    }
+    let resumed = studyrun(d, &["long.yaml", "-o", "out.h5", "--resume", "-q"]);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(studyrun(d, &["long.yaml", "-o", "straight.h5", "-q"])
+        .status
+        .success());
+    assert_same_data(&d.join("out.h5"), &d.join("straight.h5"));
+}
+
 /// `--force` replaces a result only when its own run is finished: killed on the way,
 /// the old result is still there, whole, beside the new run's journal; `--resume`
 /// finishes the new run and its file replaces the old one.
