@@ -140,7 +140,7 @@ enum Command {
         methods: Vec<String>,
         /// Relative tolerances for the adaptive methods instead of the decades 1e-3 …
         /// 1e-9 (SDIRK4: … 1e-8), comma-separated, e.g. 1e-7,5e-8,2e-8,1e-8; each
-        /// above 1e-10 and below 1, with atol = 1e-4 rtol. RK4 keeps its steps.
+        /// above 1e-10 and below 0.1, with atol = 1e-4 rtol. RK4 keeps its steps up to the sample spacing.
         #[arg(long, value_delimiter = ',', value_parser = parse_rtol)]
         rtols: Vec<f64>,
     },

@@ -47,7 +47,7 @@ impl Sampling {
         }
         // The last sample is at t = duration: a whole number of sample intervals.
         let intervals = self.duration * self.sample_rate;
-        if (intervals - intervals.round()).abs() > 1e-6 * intervals.max(1.0) {
+        if (intervals - intervals.round()).abs() > 1e-6 {
             let n = intervals.round().max(1.0);
             // Ten significant digits: enough to land on a sample.
             let nearby =

@@ -328,6 +328,29 @@ fn a_signal_stops_a_run_with_a_note_on_how_to_resume() {
     let grid = "name: long\nduration: 0.4\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9, 10, 11]\n  rpm: [300, 600]\n";
     write(d, "long.yaml", grid);
     let journal = d.join("out.h5.journal");
+    // Stopped as it starts, before its journal exists, it says nothing was recorded.
+    let child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(d)
+        .args(["long.yaml", "-o", "out.h5", "-j", "1", "-q"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !d.join("out.h5.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no lock");
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    // SAFETY: signalling our own child process.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let note = if journal.exists() {
+        "--resume` continues the run"
+    } else {
+        "before the run recorded anything; run the same command again"
+    };
+    assert!(stderr.contains(note), "{stderr}");
+    std::fs::remove_file(&journal).ok();
     for (signal, args) in [
         (
             libc::SIGTERM,
@@ -400,6 +423,11 @@ fn a_forced_run_killed_on_the_way_leaves_the_old_result() {
         before,
         "the old result is whole"
     );
+    // `merge` does not take a result an interrupted run is about to replace.
+    let merged = studyrun(d, &["merge", "m.h5", "out.h5"]);
+    assert_eq!(merged.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&merged.stderr).contains("journal of an interrupted run"));
+    assert!(!d.join("m.h5").exists());
     // `inspect` says what the journal beside each file means.
     for (file, note) in [
         ("out.h5", "holds an interrupted run that replaces it"),

@@ -63,6 +63,15 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 p.display()
             )
         })?;
+        let (journal, _) = side_paths(p);
+        ensure(!journal.exists(), || {
+            format!(
+                "{} has the journal of an interrupted run beside it ({}), whose result will \
+                 replace it; finish that run with --resume first",
+                p.display(),
+                journal.display()
+            )
+        })?;
         let same = |q: &PathBuf| match (std::fs::canonicalize(p), std::fs::canonicalize(q)) {
             (Ok(a), Ok(b)) => a == b,
             _ => p == q,

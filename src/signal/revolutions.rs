@@ -16,12 +16,17 @@ use crate::simulate::{CaseOutput, Sampling};
 const SLACK: f64 = 1e-9;
 
 /// Whole crank revolutions of `drive` in `transient ≤ t < duration` (s): the
-/// number of times `θ2(t) − θ2(transient)` reaches a multiple of 2π by `duration`.
+/// number of times `θ2(t) − θ2(transient)` reaches a multiple of 2π by `duration`
+/// (`usize::MAX` when the angle overflows, for a speed near `f64::MAX`).
 pub fn revolution_count(drive: &CrankDrive, transient: f64, duration: f64) -> usize {
     if duration <= transient {
         return 0;
     }
     let turns = (drive.motion(duration).angle - drive.motion(transient).angle) / TAU;
+    if turns.is_nan() {
+        // The angle overflowed (a speed near f64::MAX): more turns than any count.
+        return usize::MAX;
+    }
     (turns + SLACK).floor().max(0.0) as usize
 }
 

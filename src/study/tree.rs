@@ -139,7 +139,17 @@ fn parse(text: &str) -> Option<Spanned<Node>> {
 /// message. `None` when there is none, or when the text does not parse (the grid
 /// file's own parse reports that).
 pub(super) fn first_empty(text: &str) -> Option<((u64, u64), String, String)> {
-    find(&parse(text)?, &mut String::new())
+    let root = parse(text)?;
+    if let Node::Empty = root.value {
+        return Some((
+            (1, 1),
+            String::new(),
+            "the grid file is empty: it needs `name`, `duration`, `sample_rate` and \
+             `grid:`, `cases:` or a `design:`"
+                .to_string(),
+        ));
+    }
+    find(&root, &mut String::new())
 }
 
 /// The first empty value or key under `node`, whose field is `path`.
@@ -250,6 +260,7 @@ mod tests {
         assert_eq!(found("name: a\n~: 5\n").map(|f| f.1), Some(String::new()));
         // Quoted, they are strings: the grid file's own checks judge them.
         assert_eq!(found("name: '~'\nrpm: \"null\"\n"), None);
+        assert_eq!(found("# nothing\n"), Some(((1, 1), String::new())));
         // Text that does not parse is left to the grid file's parse.
         assert_eq!(found("name: [a\n"), None);
     }
