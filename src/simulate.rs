@@ -48,17 +48,17 @@ impl Sampling {
         // The last sample is at t = duration: a whole number of sample intervals.
         let intervals = self.duration * self.sample_rate;
         if (intervals - intervals.round()).abs() > 1e-6 {
-            let n = intervals.round().max(1.0);
-            // Ten significant digits: enough to land on a sample.
+            let n = intervals.floor().max(1.0);
+            // Twelve significant digits: enough to land on a sample, few enough to read.
             let nearby =
-                |x: f64| crate::error::number(format!("{x:.9e}").parse::<f64>().unwrap_or(x));
+                |x: f64| crate::error::number(format!("{x:.11e}").parse::<f64>().unwrap_or(x));
             return Err(ParamError::new(
                 "duration",
                 self.duration,
                 format!(
                     "a whole number of sample intervals: duration x sample_rate = {} is not \
                      one, so no sample would fall at t = duration; {} s or {} s would be, at {} Hz",
-                    crate::error::number(intervals),
+                    nearby(intervals),
                     nearby(n / self.sample_rate),
                     nearby((n + 1.0) / self.sample_rate),
                     crate::error::number(self.sample_rate),

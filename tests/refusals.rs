@@ -213,7 +213,7 @@ fn references_of_a_design_and_absurd_speeds_count_against_the_limit() {
     assert!(!dir.path().join("speeds.h5").exists());
     // A crank speed with more revolutions than memory holds per-revolution values
     // for, up to one that overflows every integer count.
-    for rpm in ["1e12", "1e15", "1e300"] {
+    for rpm in ["1e12", "1e15", "1e300", "1.7e308"] {
         write(
             dir.path(),
             "fast.yaml",
@@ -795,7 +795,22 @@ fn parser_errors_are_in_the_users_words() {
             "w.yaml:2:11",
             "`duration`",
             "duration x sample_rate = 2000.2",
-            "0.199980002 s or 0.200079992 s",
+            "0.199980002 s or 0.200079992001 s",
+        ],
+    );
+    // Half a sample interval off is refused at any sample count.
+    write(
+        dir.path(),
+        "w.yaml",
+        "name: w\nduration: 1.0000005\nsample_rate: 1e6\ngrid:\n  rpm: [300]\n",
+    );
+    refused(
+        &studyrun(dir.path(), &["validate", "w.yaml"]),
+        2,
+        &[
+            "`duration`",
+            "duration x sample_rate = 1000000.5",
+            "1 s or 1.000001 s",
         ],
     );
     // A number far from 1 is shown in powers of ten, not in 300 digits.
