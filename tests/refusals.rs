@@ -211,6 +211,27 @@ fn references_of_a_design_and_absurd_speeds_count_against_the_limit() {
         assert!(took < FAST, "{args:?} took {took:?}");
     }
     assert!(!dir.path().join("speeds.h5").exists());
+    // A 20 000-knot speed table copied into each of 5000 cases: 1.5 GiB of tables.
+    let list = |n: usize, f: &dyn Fn(usize) -> String| (0..n).map(f).collect::<Vec<_>>().join(", ");
+    write(
+        dir.path(),
+        "table.yaml",
+        &format!(
+            "name: table\nduration: 0.05\nsample_rate: 20000\n\
+             speed: {{profile: table, time: [{}], rpm: [{}]}}\n\
+             grid:\n  clearance: [{}]\n  damping: [{}]\n",
+            list(20_000, &|k| format!("{}", k as f64 * 2.5e-6)),
+            list(20_000, &|k| format!("{}", 300 + k % 7)),
+            list(50, &|k| format!("{}", 1e-5 + k as f64 * 1e-7)),
+            list(100, &|k| format!("{}", 100 + k)),
+        ),
+    );
+    let (out, took) = timed(
+        dir.path(),
+        &["validate", "table.yaml", "--memory-limit", "1GiB"],
+    );
+    refused(&out, 2, &["needs at least", "case table 5000 cases"]);
+    assert!(took < FAST, "took {took:?}");
     // A crank speed with more revolutions than memory holds per-revolution values
     // for, up to one that overflows every integer count.
     for rpm in ["1e12", "1e15", "1e300", "1.7e308"] {

@@ -476,18 +476,22 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let (groups, axes_names) = axis_groups(&ctx, &file)?;
     let rows = design::rows(&ctx, &file)?;
     let (total, count) = case_count(&ctx, &file, &groups, rows)?;
-    let sampled = design::resolve(&ctx, &file, &base, &effects, &axes_names)?;
-    let mut resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
-    check_repeats(&ctx, &resolved)?;
+    // Before the design is drawn: its values are rows × parameters.
     let places = memory_check::Places::of(&file);
     let mut known = memory_check::Known {
         samples: sampling.len() as u64,
         cases: total,
-        design_values: sampled.as_ref().map_or(0, |d| d.values()),
+        design_values: file.design.as_ref().map_or(0, |d| {
+            rows.saturating_mul(d.value.parameters.value.len() as u64)
+        }),
         references: 0,
         revolutions: 0,
+        speed_knots: memory_check::speed_knots(&file),
     };
     memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
+    let sampled = design::resolve(&ctx, &file, &base, &effects, &axes_names)?;
+    let mut resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
+    check_repeats(&ctx, &resolved)?;
     if let Some(d) = &sampled {
         resolved.push(d.group());
     }

@@ -111,6 +111,9 @@ pub struct Shape {
     /// Order spectra per case (docs/model.md §7.9), `window / 2 + 1` values each,
     /// held with the case table like the per-revolution values.
     pub order_spectra: usize,
+    /// Knots of the longest `speed:` table a case holds (0 without one): a time and
+    /// a speed each, in every case that has the table.
+    pub speed_knots: u64,
 }
 
 impl Shape {
@@ -122,6 +125,7 @@ impl Shape {
         case_table_bytes()
             + (replicate_values(self.replicates) + revolution_values(self.revolutions)) * 8.0
             + self.order_spectra as f64 * n_f * 8.0
+            + self.speed_knots as f64 * 16.0
     }
 }
 
@@ -521,6 +525,7 @@ mod tests {
             stored_series: CHANNELS.iter().filter(|c| c.effect.is_none()).count(),
             stored_samples: 20_001,
             order_spectra: 0,
+            speed_knots: 0,
         }
     }
 
@@ -576,6 +581,7 @@ mod tests {
             replicates: 0,
             revolutions: 0,
             order_spectra: 0,
+            speed_knots: 0,
         };
         let e = MemoryEstimate::of(shape, 2);
         // 13 float64 series of 1e9 samples per worker and reference, at least.
@@ -596,6 +602,7 @@ mod tests {
                 replicates: 0,
                 revolutions: 0,
                 order_spectra: 0,
+                speed_knots: 0,
             },
             2,
         );
@@ -619,6 +626,7 @@ mod tests {
             replicates: 0,
             revolutions: 0,
             order_spectra: 0,
+            speed_knots: 0,
         };
         let (without, with) = (
             MemoryEstimate::of(shape(0), 2),

@@ -351,6 +351,15 @@ impl Study {
                     .map_or(0, |d| d.rows * d.parameters.len() as u64),
                 replicates: self.replicates.map_or(0, |r| r.count as u64),
                 revolutions: self.revolutions as u64,
+                speed_knots: self
+                    .cases
+                    .iter()
+                    .map(|c| match &c.params.speed {
+                        Some(crate::mechanism::SpeedProfile::Table { time, .. }) => time.len(),
+                        _ => 0,
+                    })
+                    .max()
+                    .unwrap_or(0) as u64,
             },
             jobs,
         )

@@ -31,11 +31,6 @@ impl Design {
             })
             .collect()
     }
-
-    /// Values held while the study is expanded, for the memory estimate.
-    pub fn values(&self) -> u64 {
-        self.info.rows * self.columns.len() as u64
-    }
 }
 
 /// The rows a design adds per grid point and explicit case, known before anything

@@ -10,7 +10,7 @@
 //! print) would refuse too.
 
 use super::{at, Ctx};
-use crate::study::config::GridFile;
+use crate::study::config::{CaseValue, GridFile, SpeedSection};
 use crate::study::memory::{bytes, Largest, Limits, MemoryEstimate, Shape};
 use crate::study::{Study, StudyError};
 
@@ -43,6 +43,24 @@ pub(super) struct Known {
     pub references: u64,
     /// Most whole revolutions of a case (0 before the speeds are known).
     pub revolutions: u64,
+    /// Knots of the longest `speed:` table in the file (each case that has it holds
+    /// a copy).
+    pub speed_knots: u64,
+}
+
+/// Knots of the longest `speed:` table of `file`: the top-level one or an explicit
+/// case's.
+pub(super) fn speed_knots(file: &GridFile) -> u64 {
+    let knots = |s: &SpeedSection| s.time.as_ref().map_or(0, Vec::len);
+    let top = file.speed.as_ref().map_or(0, |s| knots(&s.value));
+    file.cases
+        .iter()
+        .flat_map(|c| c.value.values())
+        .filter_map(|v| match &v.value {
+            CaseValue::Speed(s) => Some(knots(s)),
+            CaseValue::Scalar(_) => None,
+        })
+        .fold(top, usize::max) as u64
 }
 
 /// Refuses the study when even the lower bound of its run's memory from `known`
@@ -69,6 +87,7 @@ pub(super) fn check_lower_bound(
         replicates: 0,
         revolutions: known.revolutions,
         order_spectra: 0,
+        speed_knots: known.speed_knots,
     };
     check(
         ctx,
