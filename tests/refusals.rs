@@ -91,7 +91,7 @@ fn a_billion_sample_case_is_refused_at_once_with_the_memory_figure() {
                 "of memory, more than the limit",
                 "--memory-limit",
                 "1000000001 samples",
-                "float32",
+                "a lower sample_rate or a shorter duration",
             ],
         );
         assert!(took < FAST, "{args:?} took {took:?}: {err}");

@@ -132,10 +132,17 @@ fn check(
             Some(places.sample_rate),
             "sample_rate",
             format!(
-                "a lower sample_rate or a shorter duration ({} samples per case now), \
-                 `output: {{dtype: float32}}` (halves the encoded records), fewer \
-                 `spectra: channels`, or fewer workers (-j)",
-                shape.samples
+                "a lower sample_rate or a shorter duration ({} samples per case now), {}or \
+                 fewer workers (-j)",
+                shape.samples,
+                // The lower bound holds no record or spectra: only the exact estimate
+                // shrinks with them.
+                if lower_bound {
+                    ""
+                } else {
+                    "`output: {dtype: float32}` (halves the encoded records), fewer \
+                     `spectra: channels`, "
+                }
             ),
         ),
         Largest::References => (
