@@ -239,12 +239,19 @@ fn shards_merge_into_the_single_run() {
     assert_same_data(&dir.path().join("whole.h5"), &dir.path().join("merged.h5"));
 }
 
-/// Starts `studyrun` in `dir` with `args` and kills it (-9) once `journal` holds more
-/// than `bytes` bytes.
-pub(crate) fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
+/// Starts `studyrun` in `dir` with `args`, sends it `signal` once `journal` holds more
+/// than `bytes` bytes, and returns what it left (status and stderr).
+pub(crate) fn signal_when_journal_passes(
+    dir: &Path,
+    args: &[&str],
+    journal: &Path,
+    bytes: u64,
+    signal: libc::c_int,
+) -> std::process::Output {
     let mut child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
         .current_dir(dir)
         .args(args)
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let start = Instant::now();
@@ -252,12 +259,33 @@ pub(crate) fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path
         assert!(start.elapsed() < Duration::from_secs(120), "no progress");
         assert!(
             child.try_wait().unwrap().is_none(),
-            "the run finished before it could be killed"
+            "the run finished before it could be stopped"
         );
         std::thread::sleep(Duration::from_millis(2));
     }
-    child.kill().unwrap(); // SIGKILL
-    child.wait().unwrap();
+    // SAFETY: signalling our own child process, which has not been waited for.
+    unsafe { libc::kill(child.id() as libc::pid_t, signal) };
+    child.wait_with_output().unwrap()
+}
+
+/// [`signal_when_journal_passes`] with SIGKILL (`kill -9`).
+pub(crate) fn kill_when_journal_passes(dir: &Path, args: &[&str], journal: &Path, bytes: u64) {
+    signal_when_journal_passes(dir, args, journal, bytes, libc::SIGKILL);
+}
+
+/// `--resume` of `grid` into `output` in `dir` succeeds and gives the file an
+/// uninterrupted run of the same grid gives.
+fn resume_matches_a_straight_run(dir: &Path, grid: &str, output: &str) {
+    let resumed = studyrun(dir, &[grid, "-o", output, "--resume", "-q"]);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(studyrun(dir, &[grid, "-o", "straight.h5", "-q"])
+        .status
+        .success());
+    assert_same_data(&dir.join(output), &dir.join("straight.h5"));
 }
 
 /// kill -9 in the middle of a run leaves no result file (only the journal and the
@@ -318,7 +346,7 @@ fn resume_after_kill_gives_the_uninterrupted_result() {
     assert_same_data(&dir.path().join("long.h5"), &dir.path().join("straight.h5"));
 }
 
-/// Ctrl-C, `kill` or a closed terminal stop a run as before (the process dies of the
+/// Ctrl-C, `kill` or a closed terminal stop a run (the process dies of the
 /// signal), after a note saying how to continue; `--resume` then finishes the run.
 #[test]
 fn a_signal_stops_a_run_with_a_note_on_how_to_resume() {
@@ -362,20 +390,7 @@ fn a_signal_stops_a_run_with_a_note_on_how_to_resume() {
         ),
     ] {
         let before = std::fs::metadata(&journal).map_or(0, |m| m.len());
-        let child = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
-            .current_dir(d)
-            .args(args)
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let start = Instant::now();
-        while std::fs::metadata(&journal).map_or(0, |m| m.len()) <= before + 1500 {
-            assert!(start.elapsed() < Duration::from_secs(120), "no progress");
-            std::thread::sleep(Duration::from_millis(2));
-        }
-        // SAFETY: signalling our own child process.
-        unsafe { libc::kill(child.id() as libc::pid_t, signal) };
-        let out = child.wait_with_output().unwrap();
+        let out = signal_when_journal_passes(d, args, &journal, before + 1500, signal);
         assert_eq!(out.status.signal(), Some(signal), "{:?}", out.status);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
@@ -385,16 +400,7 @@ fn a_signal_stops_a_run_with_a_note_on_how_to_resume() {
         );
         assert!(!d.join("out.h5").exists());
     }
-    let resumed = studyrun(d, &["long.yaml", "-o", "out.h5", "--resume", "-q"]);
-    assert!(
-        resumed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&resumed.stderr)
-    );
-    assert!(studyrun(d, &["long.yaml", "-o", "straight.h5", "-q"])
-        .status
-        .success());
-    assert_same_data(&d.join("out.h5"), &d.join("straight.h5"));
+    resume_matches_a_straight_run(d, "long.yaml", "out.h5");
 }
 
 /// `--force` replaces a result only when its own run is finished: killed on the way,
@@ -440,17 +446,8 @@ fn a_forced_run_killed_on_the_way_leaves_the_old_result() {
             "{file}: {text}"
         );
     }
-    let resumed = studyrun(d, &["long.yaml", "-o", "out.h5", "--resume", "-q"]);
-    assert!(
-        resumed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&resumed.stderr)
-    );
+    resume_matches_a_straight_run(d, "long.yaml", "out.h5");
     assert!(!journal.exists());
-    assert!(studyrun(d, &["long.yaml", "-o", "straight.h5", "-q"])
-        .status
-        .success());
-    assert_same_data(&d.join("out.h5"), &d.join("straight.h5"));
 }
 
 /// A run stopped before its journal's header was whole (killed between creating the

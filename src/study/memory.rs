@@ -206,24 +206,36 @@ impl MemoryEstimate {
     /// values, references and revolutions known), e.g. `2 workers x 9.8 GiB for one
     /// case's 1000001 samples x 15 channels as float64, …`.
     pub fn lower_bound_parts(&self) -> String {
+        format!(
+            "{} for one case's {} samples x {} channels as float64, {} ({} revolutions \
+             per case), fixed {}",
+            self.workers(),
+            self.shape.samples,
+            CHANNELS.len(),
+            self.held_parts(),
+            count(self.shape.revolutions),
+            bytes(self.fixed),
+        )
+    }
+
+    /// `2 workers x 9.8 GiB`: the workers and what each holds for its case.
+    fn workers(&self) -> String {
+        let plural = if self.jobs == 1 { "" } else { "s" };
+        format!("{} worker{plural} x {}", self.jobs, bytes(self.per_case))
+    }
+
+    /// The parts held for the whole run: `3 references x 2.75 MiB, case table 12
+    /// cases x 2.19 KiB = 26.2 KiB`.
+    fn held_parts(&self) -> String {
         let s = &self.shape;
         format!(
-            "{} worker{} x {} for one case's {} samples x {} channels as float64, \
-             {} reference{} x {}, case table {} cases x {} = {} ({} revolutions per \
-             case), fixed {}",
-            self.jobs,
-            if self.jobs == 1 { "" } else { "s" },
-            bytes(self.per_case),
-            s.samples,
-            CHANNELS.len(),
+            "{} reference{} x {}, case table {} cases x {} = {}",
             s.references,
             if s.references == 1 { "" } else { "s" },
             bytes(self.references / (s.references.max(1) as f64)),
             s.cases,
             bytes(s.case_bytes()),
             bytes(self.case_table),
-            count(s.revolutions),
-            bytes(self.fixed),
         )
     }
 
@@ -261,17 +273,15 @@ fn count(n: u64) -> String {
 }
 
 impl fmt::Display for MemoryEstimate {
-    /// The breakdown, e.g. `2 workers × 9.8 GiB per case (…), …`.
+    /// The breakdown, e.g. `2 workers x 9.8 GiB per case (…), …`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = &self.shape;
         write!(
             f,
-            "{} worker{} x {} per case ({} samples x {} channels as float64, {} spectr{}, \
-             the encoded record of {} stored series x {} samples), {} records queued for the writer x {}, {} reference{} x {}, \
-             case table {} cases x {:.0} B = {}, fixed {}",
-            self.jobs,
-            if self.jobs == 1 { "" } else { "s" },
-            bytes(self.per_case),
+            "{} per case ({} samples x {} channels as float64, {} spectr{}, the encoded \
+             record of {} stored series x {} samples), {} records queued for the writer \
+             x {}, {}, fixed {}",
+            self.workers(),
             s.samples,
             CHANNELS.len(),
             s.spectra,
@@ -280,16 +290,7 @@ impl fmt::Display for MemoryEstimate {
             s.stored_samples,
             2 * self.jobs + 1,
             bytes(self.record),
-            s.references,
-            if s.references == 1 { "" } else { "s" },
-            bytes(if s.references == 0 {
-                0.0
-            } else {
-                self.references / s.references as f64
-            }),
-            s.cases,
-            s.case_bytes(),
-            bytes(self.case_table),
+            self.held_parts(),
             bytes(self.fixed),
         )
     }
