@@ -4,7 +4,10 @@ A study file has the dimensions `case`, `time`, `frequency` and `reference`;
 per-case parameters and metrics are `[case]`, series `[case, time]`, spectra
 `[case, frequency]`, and the ideal mechanism's series `[reference, time]` with
 `reference_index[case]` saying which reference each case is compared with.
-Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm.
+Units are the file's: SI (m, kg, s, N, rad), crank speed in rpm. `time` is a CF time
+coordinate (units `seconds since 1970-01-01 00:00:00`, a nominal date): the helpers here open
+files with `decode_times=False`, so it stays seconds from the start of the simulation
+(plain `xr.open_dataset` decodes it to datetimes).
 
 open_study opens one file; open_shards opens the shard files of one study
 (`studyrun ... --shard K/N`) as one Dataset ordered by case id, as `studyrun merge`
@@ -23,6 +26,9 @@ import h5py
 import numpy as np
 import pandas as pd
 import xarray as xr
+
+OPEN_OPTIONS = {"engine": "h5netcdf", "decode_times": False}
+"""How xarray opens a study file here: through h5netcdf, `time` in seconds."""
 
 BEARING_LOCATIONS = ("crank_ground", "crank_rod")
 """Locations of the bearing in the slider-crank; `ideal` is the third, bearing-free one."""
@@ -81,14 +87,15 @@ def study_file_or_exit(program, path, needs=(), kind="a study file written by st
 def open_study(path):
     """Open a study file as an xarray Dataset (engine h5netcdf, read lazily).
 
-    The variables keep the file's units (`units` attribute of each). Close the
+    The variables keep the file's units (`units` attribute of each); `time` is in
+    seconds from the start of the simulation (not decoded to dates). Close the
     dataset (or use it in a `with` block) when done; `.load()` reads it all. Raises
     StudyFileError if the path `path` does not exist or is not an HDF5 file (an open
     file object is passed to xarray as it is).
     """
     if isinstance(path, (str, os.PathLike)):
         check_study_file(path)
-    return xr.open_dataset(path, engine="h5netcdf")
+    return xr.open_dataset(path, **OPEN_OPTIONS)
 
 
 def text(value):
@@ -271,11 +278,11 @@ def open_shards(paths, lazy=None, partial=False):
     )
     try:
         if lazy:
-            ds = xr.open_mfdataset(paths, engine="h5netcdf", combine="nested", **combine)
+            ds = xr.open_mfdataset(paths, combine="nested", **OPEN_OPTIONS, **combine)
         else:
             parts = []
             for path in paths:
-                with xr.open_dataset(path, engine="h5netcdf") as part:
+                with xr.open_dataset(path, **OPEN_OPTIONS) as part:
                     parts.append(part.load())
             ds = xr.combine_nested(parts, **combine)
     except ValueError as e:

@@ -436,7 +436,7 @@ pub fn write_file(
     for p in study.effects.recorded_parameters() {
         parameters.push(f64_param(
             p.name,
-            p.dimension.base_unit(),
+            p.dimension.file_units(),
             p.long_name,
             &|m| p.get(case(m)),
         ));

@@ -93,9 +93,15 @@ impl Sampling {
     /// The sample times (s), computed as `k / sample_rate`, never accumulated.
     pub fn times(&self) -> Vec<f64> {
         (0..self.len())
-            .map(|k| k as f64 / self.sample_rate)
+            .map(|k| sample_time(k, self.sample_rate))
             .collect()
     }
+}
+
+/// The time (s) of sample `k` at `sample_rate` (Hz): `k / sample_rate`, the bits every
+/// series, spectrum window and study file's `time` use.
+pub fn sample_time(k: usize, sample_rate: f64) -> f64 {
+    k as f64 / sample_rate
 }
 
 /// One output channel: a named scalar time series of a case.

@@ -4,9 +4,11 @@
 //! `studyrun merge` and `studyrun --resume` on each must exit 0, 1 or 2, with a message
 //! when not 0, and never die by a signal, panic or hang.
 //!
-//! Before the fix one flipped byte made `inspect` and `merge` die with SIGSEGV inside
-//! libhdf5 (`H5HG_read` from a variable-length string attribute; `H5A__close` from
-//! `H5Aiterate`), and a zeroed global heap block made them loop forever.
+//! The corpus reaches damage libhdf5 1.10 does not survive by itself: one flipped byte
+//! in a variable-length string attribute (SIGSEGV in `H5HG_read`), in the root group's
+//! attribute storage (`H5A__close` from `H5Aiterate`) or in a float datatype's size
+//! (10 MB per element: `H5Dread` copies past its buffer), and a zeroed global heap
+//! block (an endless loop).
 
 use crate::common::studyrun_ok;
 use std::collections::BTreeMap;

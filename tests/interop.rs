@@ -457,3 +457,53 @@ fn ids_are_int32_and_history_is_nc_char_with_the_merge_on_top() {
     );
     assert_eq!(lines[1], shard);
 }
+
+/// Rewrites `time` of the file at `path` through `f(sample, time)`.
+fn rewrite_times(path: &Path, f: impl Fn(usize, f64) -> f64) {
+    let file = hdf5::File::open_rw(path).unwrap();
+    let ds = file.dataset("time").unwrap();
+    let times: Vec<f64> = ds.read_raw::<f64>().unwrap();
+    let moved: Vec<f64> = times.iter().enumerate().map(|(j, &t)| f(j, t)).collect();
+    ds.write_raw(&moved).unwrap();
+}
+
+/// xarray decodes `time` to datetime64[ns] by truncation, so writing a decoded file back
+/// moves some times down by a nanosecond (tests/python/test_netcdf_tools.py runs it). The reader puts back the times studyrun
+/// writes: such a shard merges with an untouched one into the same study. A time moved
+/// further is kept as read, and the merge refuses the mix.
+#[test]
+fn times_a_datetime_round_trip_moved_are_put_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    tiny_files(d);
+    let original = StudyReader::open(d.join("s2.h5"))
+        .unwrap()
+        .layout()
+        .times
+        .clone();
+
+    std::fs::copy(d.join("s2.h5"), d.join("ns.h5")).unwrap();
+    rewrite_times(
+        &d.join("ns.h5"),
+        |j, t| if j % 3 == 1 { t - 1e-9 } else { t },
+    );
+    assert_eq!(
+        StudyReader::open(d.join("ns.h5")).unwrap().layout().times,
+        original
+    );
+    studyrun_ok(d, &["merge", "m_ns.h5", "s1.h5", "ns.h5"]);
+    assert_same_study(&d.join("m_ns.h5"), &d.join("merged.h5"));
+
+    std::fs::copy(d.join("s2.h5"), d.join("far.h5")).unwrap();
+    rewrite_times(&d.join("far.h5"), |j, t| if j == 3 { t + 3e-9 } else { t });
+    let far = StudyReader::open(d.join("far.h5")).unwrap();
+    assert_eq!(far.layout().times[3], original[3] + 3e-9);
+    drop(far);
+    let out = crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
+        .current_dir(d)
+        .args(["merge", "m_far.h5", "s1.h5", "far.h5"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("different layout"));
+}

@@ -73,6 +73,9 @@ def test_value_text(smoke):
     assert figures.value_text(smoke, "rpm", 600.0) == "600 rpm"
     assert figures.value_text(smoke, "ball_count", 9.0) == "9"
     assert figures.value_text(smoke, "crank_length", 0.05) == "50 mm"
+    # the file's N (the force at 1 m of deflection) is shown as the stiffness it states
+    assert smoke["stiffness"].attrs["units"] == "N"
+    assert figures.value_text(smoke, "stiffness", 9.57e9) == "9.57e+09 N/m^1.5"
 
 
 def test_paper_study_figures(paper, tmp_path, assert_png):

@@ -7,8 +7,12 @@ use std::time::SystemTime;
 
 /// Name of the case dimension and its coordinate variable (case ids, stored as int32).
 pub const CASE: &str = "case";
-/// Name of the time dimension and its coordinate variable (f64, s).
+/// Name of the time dimension and its coordinate variable (f64, s from the start of
+/// the simulation, with the units [`TIME_UNITS`]).
 pub const TIME: &str = "time";
+/// Units of the `time` coordinate: seconds, since a nominal reference date that CF
+/// requires of a time coordinate (the simulation has no calendar date).
+pub const TIME_UNITS: &str = "seconds since 1970-01-01 00:00:00";
 /// Name of the frequency dimension and its coordinate variable (f64, Hz).
 pub const FREQUENCY: &str = "frequency";
 /// Name of the reference dimension and its coordinate variable (reference ids, int32).

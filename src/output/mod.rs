@@ -88,7 +88,7 @@ pub use inspect::inspect;
 pub use layout::{
     command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
     VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
-    REVOLUTION, STATUS, TIME,
+    REVOLUTION, STATUS, TIME, TIME_UNITS,
 };
 pub use lock::OutputLock;
 pub use merge::merge;

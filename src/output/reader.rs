@@ -16,6 +16,7 @@ use super::layout::{
     REVOLUTION, ROLE_ATTR, STATUS, TIME,
 };
 use super::text::{self, Strings};
+use crate::simulate::sample_time;
 
 /// One case read back from a file (owned). Values stored as float32 are widened
 /// exactly to f64; rows never written read as NaN with status pending.
@@ -325,10 +326,10 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         case_ids: read_ids(file, CASE, path)?,
         // A file without series has no `time` coordinate.
         times: match file.dataset(TIME) {
-            Ok(ds) => ds.read_raw::<f64>().at(path, TIME)?,
+            Ok(ds) => read_floats(&ds, path, TIME)?,
             Err(_) => Vec::new(),
         },
-        frequencies: read(FREQUENCY)?.read_raw::<f64>().at(path, FREQUENCY)?,
+        frequencies: read_floats(&read(FREQUENCY)?, path, FREQUENCY)?,
         reference_ids: read_ids(file, REFERENCE, path)?,
         series: Vec::new(),
         spectra: Vec::new(),
@@ -344,7 +345,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         },
         revolution_metrics: Vec::new(),
         orders: match file.dataset(ORDER) {
-            Ok(ds) => ds.read_raw::<f64>().at(path, ORDER)?,
+            Ok(ds) => read_floats(&ds, path, ORDER)?,
             Err(_) => Vec::new(),
         },
         order_spectra: Vec::new(),
@@ -373,6 +374,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         let role_name = attributes::read_str(&ds, ROLE_ATTR).at(path, &name)?;
         let role = Role::parse(&role_name)
             .ok_or_else(|| format(format!("unknown {ROLE_ATTR} {role_name:?}"), &name))?;
+        if !matches!(role, Role::Parameter | Role::ReferenceParameter) {
+            check_type(&ds, path, &name, "floats", |t| {
+                matches!(t, TypeDescriptor::Float(_))
+            })?;
+        }
         let spec = VarSpec {
             units: attributes::read_str(&ds, "units").at(path, &name)?,
             long_name: attributes::read_str(&ds, "long_name").at(path, &name)?,
@@ -435,8 +441,77 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         }
     }
 
+    let status = read(STATUS)?;
+    check_type(&status, path, STATUS, "integers", |t| {
+        matches!(t, TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_))
+    })?;
+    restore_written_times(&mut layout);
     layout.validate().map_err(|reason| format(reason, "/"))?;
     Ok(layout)
+}
+
+/// Largest move of a `time` value taken for a tool's rewrite of it (s): decoding `time`
+/// to datetime64[ns] (xarray's default), which truncates to the nanosecond, and writing
+/// it back moves some times by up to one nanosecond and a rounding.
+const TIME_REWRITE_TOLERANCE: f64 = 2e-9;
+
+/// Puts back the times studyrun writes, `sample_time(j × decimate, sample_rate)`, when
+/// every time read is within [`TIME_REWRITE_TOLERANCE`] of them, so that a file whose
+/// `time` a tool rewrote merges and resumes like the original. Otherwise (or without
+/// the sampling attributes) the times stay as read.
+fn restore_written_times(layout: &mut Layout) {
+    let attribute = |name: &str| {
+        layout
+            .attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+    };
+    let (Some(&AttrValue::F64(rate)), Some(&AttrValue::I64(decimate))) =
+        (attribute("sample_rate"), attribute("decimate"))
+    else {
+        return;
+    };
+    let Ok(decimate) = usize::try_from(decimate) else {
+        return;
+    };
+    let written: Vec<f64> = (0..layout.times.len())
+        .map(|j| sample_time(j * decimate, rate))
+        .collect();
+    let close = |(w, t): (&f64, &f64)| (w - t).abs() <= TIME_REWRITE_TOLERANCE;
+    if decimate > 0 && written.iter().zip(&layout.times).all(close) {
+        layout.times = written;
+    }
+}
+
+/// Refuses dataset `name` unless its stored type is `what` (`is`): libhdf5 1.10 takes a
+/// damaged type as it finds it (a float of megabytes per element) and reads past its
+/// buffers.
+fn check_type(
+    ds: &Dataset,
+    path: &Path,
+    name: &str,
+    what: &str,
+    is: impl Fn(&TypeDescriptor) -> bool,
+) -> Result<(), StudyFileError> {
+    let found = ds.dtype().and_then(|t| t.to_descriptor()).at(path, name)?;
+    if is(&found) {
+        Ok(())
+    } else {
+        Err(StudyFileError::Format {
+            path: path.to_owned(),
+            variable: name.to_owned(),
+            reason: format!("type {found}, expected {what}"),
+        })
+    }
+}
+
+/// The values of 1-D float dataset `name`, its type checked first.
+fn read_floats(ds: &Dataset, path: &Path, name: &str) -> Result<Vec<f64>, StudyFileError> {
+    check_type(ds, path, name, "floats", |t| {
+        matches!(t, TypeDescriptor::Float(_))
+    })?;
+    ds.read_raw::<f64>().at(path, name)
 }
 
 /// The root group's members in creation order (name order if not tracked).

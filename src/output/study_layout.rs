@@ -66,7 +66,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         .effects
         .recorded_parameters()
         .map(|p| Param {
-            spec: VarSpec::new(p.name, p.dimension.base_unit(), p.long_name),
+            spec: VarSpec::new(p.name, p.dimension.file_units(), p.long_name),
             values: ParamValues::F64(cases.iter().map(|c| p.get(&c.params)).collect()),
         })
         .collect();

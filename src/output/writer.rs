@@ -16,7 +16,7 @@ use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION, ROLE_ATTR,
-    STATUS, TIME,
+    STATUS, TIME, TIME_UNITS,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
@@ -570,9 +570,22 @@ struct Creator<'a> {
 /// dimension id.
 const COORDINATES: [(&str, &str, &str); 4] = [
     (CASE, "1", "case id"),
-    (TIME, "s", "time"),
+    (TIME, TIME_UNITS, "time from the start of the simulation"),
     (FREQUENCY, "Hz", "frequency"),
     (REFERENCE, "1", "reference run id"),
+];
+
+/// The further attributes of `time`, which make it a CF time coordinate whose
+/// reference date ([`TIME_UNITS`]) is nominal.
+const TIME_ATTRIBUTES: [(&str, &str); 4] = [
+    ("standard_name", "time"),
+    ("axis", "T"),
+    ("calendar", "standard"),
+    (
+        "comment",
+        "seconds from the start of the simulation; the reference date is nominal (a CF \
+         time coordinate needs one): open with decode_times=False in xarray to read seconds",
+    ),
 ];
 
 impl Creator<'_> {
@@ -706,7 +719,13 @@ impl Creator<'_> {
             |(_, units, long_name): (&'static str, &'static str, &'static str)| (units, long_name);
         let case = self.coordinate(CASE, &ids32(&l.case_ids), meta(case), 0)?;
         let time = (!l.times.is_empty())
-            .then(|| self.coordinate(TIME, &l.times, meta(time), 1))
+            .then(|| {
+                let ds = self.coordinate(TIME, &l.times, meta(time), 1)?;
+                for (name, value) in TIME_ATTRIBUTES {
+                    attributes::write_str(&ds, name, value).at(self.path, TIME)?;
+                }
+                Ok(ds)
+            })
             .transpose()?;
         let next = 1 + usize::from(time.is_some());
         Ok((

@@ -249,7 +249,7 @@ pub const PARAMETERS: &[ParamDef] = &[
         "bearing.stiffness",
         Stiffness,
         false,
-        "ball contact stiffness K",
+        "ball contact stiffness K in N/m^(3/2), as the force at 1 m of deflection",
         |c| c.bearing.stiffness,
         |c, v| c.bearing.stiffness = v
     ),

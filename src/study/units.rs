@@ -41,9 +41,22 @@ pub enum Dimension {
 }
 
 impl Dimension {
-    /// The unit values are stored in (CF-style string for files).
+    /// The unit values are given and stored in, as messages name it.
     pub fn base_unit(self) -> &'static str {
         self.units()[0].0
+    }
+
+    /// The `units` attribute of a study file's variable holding values in
+    /// [`base_unit`](Self::base_unit): a UDUNITS string that reads as the right
+    /// quantity. That is the base unit itself but for the Hertz stiffness: no UDUNITS
+    /// string means N/m^(3/2) (it has no fractional powers), so a file states the
+    /// stiffness K as the force at 1 m of deflection, K·(1 m)^(3/2) in `N`, which is K's
+    /// number in N/m^(3/2).
+    pub fn file_units(self) -> &'static str {
+        match self {
+            Dimension::Stiffness => "N",
+            _ => self.base_unit(),
+        }
     }
 
     /// Accepted unit spellings with their factor to the base unit.
@@ -67,9 +80,8 @@ impl Dimension {
                 ("Hz", X(60.0)),
                 ("rad/s", X(60.0 / (2.0 * PI))),
             ],
-            // The first is what files say: UDUNITS has no fractional powers and reads
-            // every spelling it accepts (`N m-1.5` as 0.5 kg s-2) as another quantity;
-            // this one it rejects, and pint (also with cf_xarray's syntax) reads it right.
+            // UDUNITS reads every spelling of these it accepts (`N m-1.5` as 0.5 kg s-2)
+            // as another quantity: files use `file_units` instead.
             Dimension::Stiffness => &[
                 ("N/m^(3/2)", P(0)),
                 ("N m-1.5", P(0)),

@@ -6,21 +6,26 @@ converts to the reference unit with the right factor) or rejects it; it is wrong
 the library reads some other quantity without a word, as UDUNITS (cf_units) reads
 `N m-1.5` as `0.5 kg s-2`: UDUNITS has no fractional exponents, `.` is its
 multiplication and `/` its division, so `m-1.5` is m-1 times 5 and `m-3/2` is m-3 / 2.
+That is why a file states the Hertz stiffness K (N m^(-3/2)) as the force at 1 m of
+deflection, in N.
 """
 
 import math
 
-# quantity: (cf_units reference or None where UDUNITS cannot express the quantity,
-#            pint reference, what 1 unit of the file is in the reference)
+# quantity: (cf_units reference, pint reference, what 1 unit of the file is in the
+#            reference)
 QUANTITIES = {
     "dimensionless": ("1", "dimensionless", 1.0),
     "length": ("m", "m", 1.0),
     "angle": ("rad", "rad", 1.0),
     # crank speed, stored in revolutions per minute: 1 rpm = 2 pi / 60 rad/s
     "crank_speed": ("rad s-1", "rad/s", 2.0 * math.pi / 60.0),
-    # Hertz contact stiffness K in F = K delta^(3/2): kg m^(-1/2) s^-2, a half-integer
-    # power of length, which no UDUNITS string can express
-    "stiffness": (None, "N/m**1.5", 1.0),
+    # Hertz contact stiffness K in F = K delta^(3/2) has a half-integer power of length,
+    # which no UDUNITS string expresses: a file holds K (1 m)^(3/2), the force at 1 m of
+    # deflection, whose number in N is K's in N/m^(3/2)
+    "stiffness_at_1m": ("m kg s-2", "N", 1.0),
+    # K itself, kg m^(-1/2) s^-2: for the checks that no UDUNITS spelling means it
+    "hertz_stiffness": (None, "N/m**1.5", 1.0),
     "spring_stiffness": ("kg s-2", "N/m", 1.0),
     "damping": ("kg s-1", "kg/s", 1.0),
     "mass": ("kg", "kg", 1.0),
@@ -49,7 +54,7 @@ _BY_QUANTITY = {
     ],
     "angle": ["waviness_phase", "inner_waviness_phase", "outer_waviness_phase", "defect_angle"],
     "crank_speed": ["rpm", "speed_from", "speed_to", "speed_mean", "speed_amplitude"],
-    "stiffness": ["stiffness"],
+    "stiffness_at_1m": ["stiffness"],
     "spring_stiffness": ["k_h"],
     "damping": ["damping", "c_h"],
     "mass": ["crank_mass", "rod_mass", "slider_mass", "m_h"],

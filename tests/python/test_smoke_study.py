@@ -29,8 +29,27 @@ def path():
 
 @pytest.fixture(scope="module")
 def ds(path):
-    with xr.open_dataset(path, engine="h5netcdf") as d:
+    """The file as the analysis scripts open it: `time` in seconds."""
+    with xr.open_dataset(path, engine="h5netcdf", decode_times=False) as d:
         yield d.load()
+
+
+def test_time_is_a_cf_time_coordinate_of_seconds(path, ds):
+    """`time` is seconds from the start (the file's numbers, decode_times=False); with
+    xarray's default decoding it is the nominal date 1970-01-01 plus those seconds,
+    truncated to the nanosecond."""
+    with h5py.File(path, "r") as f:
+        seconds = f["time"][:]
+    np.testing.assert_array_equal(ds.time.values, seconds)
+    assert np.array_equal(seconds, np.arange(seconds.size) / ds.attrs["sample_rate"])
+    assert ds.time.attrs["units"] == "seconds since 1970-01-01 00:00:00"
+    assert ds.time.attrs["standard_name"] == "time" and ds.time.attrs["axis"] == "T"
+    with xr.open_dataset(path, engine="h5netcdf") as decoded:
+        t = decoded.time
+        assert np.issubdtype(t.dtype, np.datetime64)
+        offset_ns = (t.values - np.datetime64("1970-01-01T00:00:00", "ns")).astype(np.int64)
+        exact_ns = seconds * 1e9
+        assert ((offset_ns - exact_ns) <= 1e-6).all() and ((exact_ns - offset_ns) < 1.0 + 1e-6).all()
 
 
 def test_named_dimensions_units_and_long_names(ds):
