@@ -32,7 +32,8 @@ def path():
 
 @pytest.fixture(scope="module")
 def ds(path):
-    with xr.open_dataset(path, engine="h5netcdf") as dataset:
+    """The file as analysis/ opens it: `time` in seconds, not decoded to dates."""
+    with xr.open_dataset(path, engine="h5netcdf", decode_times=False) as dataset:
         yield dataset.load()
 
 
