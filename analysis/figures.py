@@ -22,6 +22,7 @@ from analysis.frequencies import CRANK_ROD_NOTE, case_frequencies  # noqa: E402
 from analysis.studyfile import (  # noqa: E402
     amplitude_spectrum,
     analysis_window,
+    number_units,
     reference_for,
     select_cases,
     spectrum_window,
@@ -44,17 +45,12 @@ CHANNEL_TEXT = {
 }
 UNIT_TEXT = {"m s-2": "m/s²", "m2 s-4": "(m/s²)²", "m4 s-8": "(m/s²)⁴", "N2": "N²", "N4": "N⁴",
              "N s m-1": "N s/m", "kg m2": "kg m²", "1": ""}
-VARIABLE_UNIT_TEXT = {"stiffness": "N/m^1.5"}
-"""Display units of variables whose file units state another quantity: the file holds the
-Hertz stiffness K as the force at 1 m of deflection (N), whose number is K in N/m^1.5."""
 PARAMETER_TEXT = {"ball_count": "N_b", "location": "bearing", "waviness_amplitude": "waviness", "rpm": "speed"}
 
 
 def unit_text(ds, name):
     """The display unit of variable `name` (e.g. 'm/s²'; '' for dimensionless)."""
-    if name in VARIABLE_UNIT_TEXT:
-        return VARIABLE_UNIT_TEXT[name]
-    units = str(ds[name].attrs.get("units", ""))
+    units = number_units(ds, name)
     return UNIT_TEXT.get(units, units)
 
 

@@ -39,6 +39,7 @@ from analysis import diagnosis_figures as dfig  # noqa: E402
 from analysis.studyfile import (  # noqa: E402
     constant_rpm,
     grid_axes,
+    number_units,
     open_study,
     select_cases,
     study_file_or_exit,
@@ -104,7 +105,7 @@ def parse_selection(ds, item):
     try:
         return name, float(value)
     except ValueError:
-        units = ds[name].attrs.get("units", "1")
+        units = number_units(ds, name)
         raise ValueError(f"--select {item!r}: {name} takes a plain number in the file's unit {units} "
                          f"(units are not parsed); the file has {_values_text(ds, name)}") from None
 

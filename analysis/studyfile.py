@@ -30,6 +30,11 @@ import xarray as xr
 OPEN_OPTIONS = {"engine": "h5netcdf", "decode_times": False}
 """How xarray opens a study file here: through h5netcdf, `time` in seconds."""
 
+NUMBER_UNITS = {"stiffness": "N/m^1.5"}
+"""The unit of a variable's numbers where its `units` state another quantity: the file
+holds the Hertz stiffness K as the force at 1 m of deflection (N), whose number is K in
+N/m^1.5 (UDUNITS has no half powers)."""
+
 BEARING_LOCATIONS = ("crank_ground", "crank_rod")
 """Locations of the bearing in the slider-crank; `ideal` is the third, bearing-free one."""
 
@@ -96,6 +101,12 @@ def open_study(path):
     if isinstance(path, (str, os.PathLike)):
         check_study_file(path)
     return xr.open_dataset(path, **OPEN_OPTIONS)
+
+
+def number_units(ds, name):
+    """The unit the numbers of variable `name` are in: its `units` (`1` if none), but
+    N/m^1.5 for the stiffness (NUMBER_UNITS)."""
+    return NUMBER_UNITS.get(name, str(ds[name].attrs.get("units", "1")))
 
 
 def text(value):
@@ -356,7 +367,7 @@ def select_cases(ds, **params):
         if values.dtype.kind in "USO":
             mask &= values == value
         elif isinstance(value, (str, bytes)):
-            units = ds[name].attrs.get("units", "1")
+            units = number_units(ds, name)
             raise ValueError(
                 f"{name} is a number in the file's unit ({units}), not {value!r}: give a plain number "
                 f"in that unit (units are not parsed), e.g. {name}={float(values[0]):g}"

@@ -76,6 +76,8 @@ def test_value_text(smoke):
     # the file's N (the force at 1 m of deflection) is shown as the stiffness it states
     assert smoke["stiffness"].attrs["units"] == "N"
     assert figures.value_text(smoke, "stiffness", 9.57e9) == "9.57e+09 N/m^1.5"
+    with pytest.raises(ValueError, match=r"file's unit \(N/m\^1\.5\)"):
+        select_cases(smoke, stiffness="9.57e9 N/m^1.5")
 
 
 def test_paper_study_figures(paper, tmp_path, assert_png):

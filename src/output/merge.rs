@@ -18,17 +18,60 @@ fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), RunError> {
     }
 }
 
-/// Whether `a` and `b` hold the same variables (names, units, long names), in any
-/// order (ncks sorts them by name).
-fn same_variables<'a>(
+/// What differs between the variables `a` of a shard and `b` of the first (matched by
+/// name, in any order: ncks sorts them by name): a variable one of them lacks, or one
+/// whose units or long name differ; `None` when they are alike.
+fn variables_difference<'a>(
     a: impl IntoIterator<Item = &'a VarSpec>,
     b: impl IntoIterator<Item = &'a VarSpec>,
-) -> bool {
-    let mut a: Vec<&VarSpec> = a.into_iter().collect();
-    let mut b: Vec<&VarSpec> = b.into_iter().collect();
-    a.sort_by(|x, y| x.name.cmp(&y.name));
-    b.sort_by(|x, y| x.name.cmp(&y.name));
-    a == b
+) -> Option<String> {
+    let a: Vec<&VarSpec> = a.into_iter().collect();
+    let b: Vec<&VarSpec> = b.into_iter().collect();
+    let find = |specs: &[&'a VarSpec], name: &str| specs.iter().find(|s| s.name == name).copied();
+    for x in &a {
+        match find(&b, &x.name) {
+            None => return Some(format!("it has a variable `{}`", x.name)),
+            Some(y) if y.units != x.units => {
+                return Some(format!(
+                    "its `{}` has the units `{}`, not `{}`",
+                    x.name, x.units, y.units
+                ))
+            }
+            Some(y) if y.long_name != x.long_name => {
+                return Some(format!("its `{}` has another long_name", x.name))
+            }
+            Some(_) => {}
+        }
+    }
+    b.iter()
+        .find(|y| find(&a, &y.name).is_none())
+        .map(|y| format!("it has no variable `{}`", y.name))
+}
+
+/// What keeps the shard of layout `l` from merging with the first shard's `first`, in
+/// words; `None` when nothing does.
+fn layout_difference(l: &Layout, first: &Layout) -> Option<String> {
+    fn params(l: &Layout) -> impl Iterator<Item = &VarSpec> {
+        l.parameters.iter().map(|p| &p.spec)
+    }
+    let coordinates = [
+        ("time", l.times != first.times),
+        ("frequency", l.frequencies != first.frequencies),
+        ("replicate", l.replicates != first.replicates),
+        ("revolution", l.revolutions != first.revolutions),
+        ("order", l.orders != first.orders),
+        ("reference", l.reference_ids != first.reference_ids),
+    ];
+    if let Some((name, _)) = coordinates.iter().find(|(_, differs)| *differs) {
+        return Some(format!("its `{name}` coordinate differs"));
+    }
+    variables_difference(&l.series, &first.series)
+        .or_else(|| variables_difference(&l.spectra, &first.spectra))
+        .or_else(|| variables_difference(&l.metrics, &first.metrics))
+        .or_else(|| variables_difference(&l.replicate_metrics, &first.replicate_metrics))
+        .or_else(|| variables_difference(&l.revolution_metrics, &first.revolution_metrics))
+        .or_else(|| variables_difference(&l.order_spectra, &first.order_spectra))
+        .or_else(|| variables_difference(params(l), params(first)))
 }
 
 /// For each variable of `want`, its index in `have` (same names, checked before).
@@ -120,33 +163,15 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                 )
             },
         )?;
-        let l = r.layout();
-        fn params(l: &Layout) -> impl Iterator<Item = &VarSpec> {
-            l.parameters.iter().map(|p| &p.spec)
+        if let Some(difference) = layout_difference(r.layout(), first) {
+            return Err(RunError::Refused(format!(
+                "{} has a different layout than {}: {difference}",
+                path.display(),
+                shards[0].display()
+            )));
         }
-        ensure(
-            l.times == first.times
-                && l.frequencies == first.frequencies
-                && same_variables(&l.series, &first.series)
-                && same_variables(&l.spectra, &first.spectra)
-                && same_variables(&l.metrics, &first.metrics)
-                && same_variables(&l.replicate_metrics, &first.replicate_metrics)
-                && l.replicates == first.replicates
-                && same_variables(&l.revolution_metrics, &first.revolution_metrics)
-                && l.revolutions == first.revolutions
-                && same_variables(&l.order_spectra, &first.order_spectra)
-                && l.orders == first.orders
-                && same_variables(params(l), params(first))
-                && l.reference_ids == first.reference_ids,
-            || {
-                format!(
-                    "{} has a different layout than {}",
-                    path.display(),
-                    shards[0].display()
-                )
-            },
-        )?;
     }
+
     // (shard, row) of every case, sorted by case id.
     let mut order: Vec<(u64, usize, usize)> = readers
         .iter()

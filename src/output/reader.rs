@@ -13,7 +13,7 @@ use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
     FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
-    REVOLUTION, ROLE_ATTR, STATUS, TIME,
+    REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
 };
 use super::text::{self, Strings};
 use crate::simulate::sample_time;
@@ -326,7 +326,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         case_ids: read_ids(file, CASE, path)?,
         // A file without series has no `time` coordinate.
         times: match file.dataset(TIME) {
-            Ok(ds) => read_floats(&ds, path, TIME)?,
+            Ok(ds) => read_times(&ds, path)?,
             Err(_) => Vec::new(),
         },
         frequencies: read_floats(&read(FREQUENCY)?, path, FREQUENCY)?,
@@ -475,13 +475,53 @@ fn restore_written_times(layout: &mut Layout) {
     let Ok(decimate) = usize::try_from(decimate) else {
         return;
     };
-    let written: Vec<f64> = (0..layout.times.len())
-        .map(|j| sample_time(j * decimate, rate))
-        .collect();
+    let Some(written) = (0..layout.times.len())
+        .map(|j| j.checked_mul(decimate).map(|k| sample_time(k, rate)))
+        .collect::<Option<Vec<f64>>>()
+    else {
+        return;
+    };
     let close = |(w, t): (&f64, &f64)| (w - t).abs() <= TIME_REWRITE_TOLERANCE;
     if decimate > 0 && written.iter().zip(&layout.times).all(close) {
         layout.times = written;
     }
+}
+
+/// The `time` coordinate's values (s from the start of the simulation), its type and
+/// units checked first: [`TIME_UNITS`] in a spelling UDUNITS reads alike (xarray writes
+/// `seconds since 1970-01-01`), or plain seconds. Other units (a tool's `milliseconds
+/// since ...`, another date) are refused rather than taken for seconds.
+fn read_times(ds: &Dataset, path: &Path) -> Result<Vec<f64>, StudyFileError> {
+    let units = attributes::read_str(ds, "units").at(path, TIME)?;
+    if !seconds_from_the_epoch(&units) {
+        return Err(StudyFileError::Format {
+            path: path.to_owned(),
+            variable: TIME.to_owned(),
+            reason: format!("units {units:?}; studyrun reads `{TIME_UNITS}`"),
+        });
+    }
+    read_floats(ds, path, TIME)
+}
+
+/// Whether `units` are seconds since 1970-01-01 00:00:00 UTC (date alone, time with `T`
+/// or a space, `Z` or `UTC` or a zero offset), or plain seconds.
+fn seconds_from_the_epoch(units: &str) -> bool {
+    let (unit, date) = match units.split_once(" since ") {
+        Some((unit, date)) => (unit.trim(), Some(date.trim())),
+        None => (units.trim(), None),
+    };
+    let seconds = matches!(unit, "s" | "sec" | "secs" | "second" | "seconds");
+    let epoch = date.is_none_or(|date| {
+        let mut date = date;
+        for zone in ["Z", "UTC", "+00:00", "+0000", "+00"] {
+            date = date.strip_suffix(zone).unwrap_or(date).trim_end();
+        }
+        matches!(
+            date,
+            "1970-01-01" | "1970-01-01 00:00:00" | "1970-01-01T00:00:00" | "1970-01-01 00:00"
+        )
+    });
+    seconds && epoch
 }
 
 /// Refuses dataset `name` unless its stored type is `what` (`is`): libhdf5 1.10 takes a
@@ -557,4 +597,34 @@ fn read_storage(ds: &Dataset) -> hdf5::Result<Storage> {
         float32,
         deflate_level,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::seconds_from_the_epoch;
+
+    #[test]
+    fn time_units_are_seconds_from_the_epoch_in_any_spelling() {
+        for units in [
+            super::TIME_UNITS,
+            "seconds since 1970-01-01",
+            "s since 1970-01-01T00:00:00Z",
+            "second since 1970-01-01 00:00:00 UTC",
+            "seconds since 1970-01-01 00:00:00 +00:00",
+            "s",
+            "seconds",
+        ] {
+            assert!(seconds_from_the_epoch(units), "{units}");
+        }
+        for units in [
+            "milliseconds since 1970-01-01",
+            "seconds since 2000-01-01",
+            "days since 1970-01-01",
+            "ms",
+            "seconds since 1970-01-01 00:00:00 +01:00",
+            "",
+        ] {
+            assert!(!seconds_from_the_epoch(units), "{units}");
+        }
+    }
 }

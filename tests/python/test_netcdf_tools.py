@@ -149,7 +149,8 @@ def test_merge_reads_shards_a_tool_rewrote(studyrun, shards, tool, which, tmp_pa
     ]
     out = tmp_path / "merged.h5"
     run([studyrun, "merge", str(out), *map(str, rewritten)])
-    with xr.open_dataset(out, engine="h5netcdf") as got, xr.open_dataset(merged, engine="h5netcdf") as want:
+    raw = dict(engine="h5netcdf", decode_times=False)  # `time` as stored: seconds and its units
+    with xr.open_dataset(out, **raw) as got, xr.open_dataset(merged, **raw) as want:
         assert set(got.variables) == set(want.variables)
         assert dict(got.sizes) == dict(want.sizes)
         for name, w in want.variables.items():
@@ -163,3 +164,16 @@ def test_merge_reads_shards_a_tool_rewrote(studyrun, shards, tool, which, tmp_pa
                 assert np.array_equal(g.values, w.values), name
         for key in ("study_name", "study_fingerprint", "grid_axes", "study_cases", "file_cases"):
             assert str(got.attrs[key]) == str(want.attrs[key]), key
+
+
+def test_time_in_other_units_is_refused_not_taken_for_seconds(studyrun, smoke_path, tmp_path):
+    """A tool that writes `time` in milliseconds (xarray with another encoding): the
+    numbers are not seconds, so studyrun refuses the file, naming the units."""
+    out = tmp_path / "ms.h5"
+    with xr.open_dataset(smoke_path, engine="h5netcdf") as ds:
+        ds = ds.load()
+        ds.time.encoding.update(units="milliseconds since 1970-01-01", dtype="float64")
+        ds.to_netcdf(out, engine="h5netcdf")
+    result = subprocess.run([studyrun, "inspect", str(out)], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "milliseconds since 1970-01-01" in result.stderr and "`time`" in result.stderr, result.stderr
