@@ -28,10 +28,16 @@ import xarray as xr  # noqa: E402
 
 from analysis.studyfile import study_file_or_exit  # noqa: E402
 
-ACCURACY_VARIABLES = ("method", "setting", "horizon")
-"""Per-case variables only an accuracy file has (which integrator, its setting, the horizon)."""
+ACCURACY_VARIABLES = ("method", "rtol", "step", "horizon")
+"""Per-case variables only an accuracy file has (which integrator, its tolerance or step,
+the horizon)."""
 
 MARKERS = {"dopri5": "o", "tsit5": "D", "dop853": "v", "sdirk4": "s", "rk4": "^"}
+
+
+def settings(ds):
+    """Each row's setting: the step (s) of rk4, the relative tolerance of the others."""
+    return np.where(ds.method.values == "rk4", ds.step.values, ds.rtol.values)
 
 
 def points(ds, error="metric", channel="slider_acceleration", cost="wall_time", stat="max", chaotic=False):
@@ -45,16 +51,17 @@ def points(ds, error="metric", channel="slider_acceleration", cost="wall_time", 
     if not chaotic:
         ok &= ds.horizon.values >= ds.attrs.get("duration", ds.horizon.values.max()) - 1e-12
     out = {}
+    setting = settings(ds)
     for method in np.unique(ds.method.values):
         rows = (ds.method.values == method) & ok
-        settings = np.unique(ds.setting.values[rows])[::-1]
+        ladder = np.unique(setting[rows])[::-1]
         costs, errs = [], []
-        for s in settings:
-            sel = rows & (ds.setting.values == s)
+        for s in ladder:
+            sel = rows & (setting == s)
             costs.append(float(np.mean(ds[cost].values[sel])))
             e = ds[var].values[sel]
             errs.append(float(np.max(e) if stat == "max" else np.median(e)))
-        out[str(method)] = (settings, np.array(costs), np.array(errs))
+        out[str(method)] = (ladder, np.array(costs), np.array(errs))
     return out
 
 

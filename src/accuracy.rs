@@ -413,10 +413,22 @@ pub fn write_file(
             ),
         },
         f64_param(
-            "setting",
+            "rtol",
             "1",
-            "relative tolerance (dopri5, tsit5, dop853, sdirk4) or step in s (rk4)",
-            &|m| describe(&m.method).1,
+            "relative tolerance of dopri5, tsit5, dop853 and sdirk4 (NaN for rk4)",
+            &|m| match m.method {
+                Method::Rk4 { .. } => f64::NAN,
+                _ => describe(&m.method).1,
+            },
+        ),
+        f64_param(
+            "step",
+            "s",
+            "fixed step of rk4 (NaN for the adaptive methods)",
+            &|m| match m.method {
+                Method::Rk4 { step } => step,
+                _ => f64::NAN,
+            },
         ),
         f64_param(
             "horizon",

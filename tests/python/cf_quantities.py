@@ -45,6 +45,8 @@ _BY_QUANTITY = {
         "min_loaded_balls", "max_loaded_balls", "steps", "rejected_steps", "rhs_evals",
         "contact_events", "loaded_balls", "speed_profile", "revolution", "replicate",
         "order", "ftf_order", "bpfo_order", "bpfi_order", "bsf_order",
+        # accuracy files
+        "source_case", "method", "rtol",
     ],
     "length": [
         "clearance", "waviness_amplitude", "inner_waviness_amplitude", "outer_waviness_amplitude",
@@ -59,7 +61,7 @@ _BY_QUANTITY = {
     "damping": ["damping", "c_h"],
     "mass": ["crank_mass", "rod_mass", "slider_mass", "m_h"],
     "inertia": ["crank_inertia", "rod_inertia", "slider_inertia"],
-    "time": ["time", "wall_time", "stiffness_switch_time", "chatter_time", "speed_over"],
+    "time": ["time", "wall_time", "stiffness_switch_time", "chatter_time", "speed_over", "horizon", "step"],
     "frequency": ["frequency", "speed_frequency"],
     "acceleration": ["slider_acceleration", "housing_acceleration_x", "housing_acceleration_y"],
     "moment": ["crank_moment"],
@@ -70,6 +72,11 @@ _BY_QUANTITY = {
 }
 VARIABLES = {name: q for q, names in _BY_QUANTITY.items() for name in names}
 """Variable name -> quantity, for the names that are not derived from another."""
+
+# an accuracy file's errors of channel X, relative to the reference run: dimensionless
+_RELATIVE = (
+    "reference_metric_uncertainty_", "max_error_", "rms_error_", "metric_error_",
+)
 
 # metric_of_X, its value per revolution, spectrum and order spectrum of X and the
 # reference run's X have X's quantity
@@ -84,6 +91,8 @@ def quantity_of(name):
     """The quantity of variable `name`, or None if the table does not know it."""
     if name in VARIABLES:
         return VARIABLES[name]
+    if name.startswith(_RELATIVE):
+        return "dimensionless"
     for suffix in _SUFFIXES:
         if name.endswith(suffix):
             return quantity_of(name[: -len(suffix)])

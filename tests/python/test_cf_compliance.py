@@ -5,7 +5,8 @@ and "Warnings"), through the API and through the command line users run.
 The file is checked through a link named `*.nc` (the checker wants that suffix, §2.1).
 
 Environment: STUDYRUN_SMOKE_FILE (the result of `studyrun studies/smoke.yaml`) and,
-optional, STUDYRUN_MERGED_FILE (`studyrun merge` of its shards); unset: skip.
+optional, STUDYRUN_MERGED_FILE (`studyrun merge` of its shards) and
+STUDYRUN_ACCURACY_FILE (`studyrun accuracy studies/accuracy_smoke.yaml`); unset: skip.
 """
 
 import os
@@ -19,7 +20,7 @@ import pytest
 
 from cf_quantities import units_attribute
 
-FILES = ("STUDYRUN_SMOKE_FILE", "STUDYRUN_MERGED_FILE")
+FILES = ("STUDYRUN_SMOKE_FILE", "STUDYRUN_MERGED_FILE", "STUDYRUN_ACCURACY_FILE")
 
 # CF-1.8 §2.2 numeric types (compliance-checker's cf:1.8 list): no 64-bit or unsigned integers.
 CF18_INTEGERS = (np.int8, np.int16, np.int32)

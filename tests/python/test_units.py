@@ -7,7 +7,8 @@ as the force at 1 m of deflection, in `N`. The quantity of each variable is in
 cf_quantities.py.
 
 Environment: STUDYRUN_SMOKE_FILE (the result of `studyrun studies/smoke.yaml`); unset:
-skip the file tests. STUDYRUN_MERGED_FILE, if set, is checked too.
+skip the file tests. STUDYRUN_MERGED_FILE and STUDYRUN_ACCURACY_FILE (`studyrun
+accuracy studies/accuracy_smoke.yaml`), if set, are checked too.
 """
 
 import os
@@ -26,7 +27,7 @@ from cf_quantities import (
 cf_units = pytest.importorskip("cf_units")
 pytest.importorskip("pint")
 
-FILES = ("STUDYRUN_SMOKE_FILE", "STUDYRUN_MERGED_FILE")
+FILES = ("STUDYRUN_SMOKE_FILE", "STUDYRUN_MERGED_FILE", "STUDYRUN_ACCURACY_FILE")
 
 
 def file_units(path):
