@@ -232,6 +232,24 @@ def _check_complete(paths, case_ids, study_cases):
     )
 
 
+TIME_REWRITE_TOLERANCE = 2e-9
+"""How far (s) a tool's rewrite may have moved a time: decoding `time` to datetime64[ns]
+(xarray's default) truncates to the nanosecond, and writing it back keeps that."""
+
+
+def written_times(ds):
+    """`ds` with `time` put back to the times studyrun writes, `j·decimate / sample_rate`,
+    when every time is within TIME_REWRITE_TOLERANCE of them (as `studyrun merge` reads
+    them); otherwise, or without `time`, `ds` as it is."""
+    if "time" not in ds.coords or "sample_rate" not in ds.attrs:
+        return ds
+    steps = np.arange(ds.sizes["time"], dtype=np.int64) * int(ds.attrs.get("decimate", 1))
+    written = steps.astype(np.float64) / float(ds.attrs["sample_rate"])
+    if np.all(np.abs(ds["time"].values - written) <= TIME_REWRITE_TOLERANCE):
+        return ds.assign_coords(time=("time", written, ds["time"].attrs))
+    return ds
+
+
 def open_shards(paths, lazy=None, partial=False):
     """Open the shard files of one study (`studyrun ... --shard K/N`) as one Dataset
     ordered by case id: the variables and values `studyrun merge` would write, without
@@ -239,7 +257,8 @@ def open_shards(paths, lazy=None, partial=False):
 
     `paths` is a list of files in any order, or a glob pattern (`"part*.h5"`). Variables
     over `case` are concatenated and sorted by case id; the others (the `reference`
-    runs, `time`, `frequency`) must be the same in every shard and are kept once. Root
+    runs, `time`, `frequency`) must be the same in every shard and are kept once (times
+    a tool's datetime round trip moved by a nanosecond are put back: written_times). Root
     attributes that every shard has alike are kept, `history` holds the shards' lines,
     `file_cases` becomes the number of cases opened and `shard` is empty, as in a
     merged file (`created` and other differing attributes are dropped).
@@ -289,12 +308,14 @@ def open_shards(paths, lazy=None, partial=False):
     )
     try:
         if lazy:
-            ds = xr.open_mfdataset(paths, combine="nested", **OPEN_OPTIONS, **combine)
+            ds = xr.open_mfdataset(
+                paths, combine="nested", preprocess=written_times, **OPEN_OPTIONS, **combine
+            )
         else:
             parts = []
             for path in paths:
                 with xr.open_dataset(path, **OPEN_OPTIONS) as part:
-                    parts.append(part.load())
+                    parts.append(written_times(part.load()))
             ds = xr.combine_nested(parts, **combine)
     except ValueError as e:
         if "study_fingerprint" in str(e):
