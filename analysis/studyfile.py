@@ -245,9 +245,14 @@ def written_times(ds):
         return ds
     steps = np.arange(ds.sizes["time"], dtype=np.int64) * int(ds.attrs.get("decimate", 1))
     written = steps.astype(np.float64) / float(ds.attrs["sample_rate"])
-    if np.all(np.abs(ds["time"].values - written) <= TIME_REWRITE_TOLERANCE):
-        return ds.assign_coords(time=("time", written, ds["time"].attrs))
-    return ds
+    if not np.all(np.abs(ds["time"].values - written) <= TIME_REWRITE_TOLERANCE):
+        return ds
+    # Rebuilt in the file's variable order (assign_coords would move `time` last).
+    time = ds.variables["time"].copy(data=written)
+    out = xr.Dataset(
+        {name: time if name == "time" else var for name, var in ds.variables.items()}, attrs=ds.attrs
+    )
+    return out.set_coords([name for name in ds.coords if name not in out.coords])
 
 
 def open_shards(paths, lazy=None, partial=False):
