@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use crate::signal::metrics::{vibration_metrics, VibrationMetrics};
 use crate::signal::replicates::predictability_horizon;
 use crate::simulate::{simulate, CaseOutput};
-use crate::solve::{Method, SolverSettings, MAX_RTOL};
+use crate::solve::{rk4_step_fits, Method, SolverSettings, MAX_RTOL};
 use crate::study::Study;
 
 pub use crate::signal::replicates::HORIZON_THRESHOLD;
@@ -109,7 +109,7 @@ pub fn check_rtol(rtol: f64) -> Result<(), String> {
 /// at most the spacing (the grid file refuses longer ones), any adaptive method.
 pub fn runnable(method: &Method, spacing: f64) -> bool {
     match *method {
-        Method::Rk4 { step } => step <= spacing * (1.0 + 1e-9),
+        Method::Rk4 { step } => rk4_step_fits(step, spacing),
         _ => true,
     }
 }
@@ -129,7 +129,7 @@ pub fn setting_label(setting: f64) -> String {
     }
 }
 
-/// The integrators' names, as [`describe`] gives them and the grid file's
+/// The integrators' names, as [`Method::name`] gives them and the grid file's
 /// `solver.method` takes them.
 pub const METHOD_NAMES: [&str; 5] = ["dopri5", "tsit5", "dop853", "sdirk4", "rk4"];
 
@@ -137,11 +137,11 @@ pub const METHOD_NAMES: [&str; 5] = ["dopri5", "tsit5", "dop853", "sdirk4", "rk4
 /// `rk4`, rtol or step in s). The names are those of the grid file's `solver.method`.
 pub fn describe(m: &Method) -> (&'static str, f64) {
     match *m {
-        Method::DormandPrince { rtol, .. } => ("dopri5", rtol),
-        Method::Tsit5 { rtol, .. } => ("tsit5", rtol),
-        Method::Dop853 { rtol, .. } => ("dop853", rtol),
-        Method::Sdirk4 { rtol, .. } => ("sdirk4", rtol),
-        Method::Rk4 { step } => ("rk4", step),
+        Method::DormandPrince { rtol, .. }
+        | Method::Tsit5 { rtol, .. }
+        | Method::Dop853 { rtol, .. }
+        | Method::Sdirk4 { rtol, .. } => (m.name(), rtol),
+        Method::Rk4 { step } => (m.name(), step),
     }
 }
 
@@ -372,8 +372,8 @@ pub fn cheapest_within(
 }
 
 /// Writes the measurements as a study-style file: one row (`case` dimension) per
-/// (case, setting), with the case's parameters, `source_case`, `method`, `setting`
-/// (rtol, or the RK4 step in s), the case's `horizon` and reference metric
+/// (case, setting), with the case's parameters, `source_case`, `method`, `rtol` (NaN
+/// for RK4) and `step` (RK4's, s; NaN for the others), the case's `horizon` and reference metric
 /// uncertainties, and the errors and costs as metrics. Rows whose run failed have
 /// status failed and the error message.
 pub fn write_file(

@@ -189,18 +189,40 @@ impl SolverSettings {
     }
 }
 
+impl Method {
+    /// The method's name, as a grid file's `solver.method` takes it: `dopri5`, `tsit5`,
+    /// `dop853`, `sdirk4` or `rk4`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::DormandPrince { .. } => "dopri5",
+            Method::Tsit5 { .. } => "tsit5",
+            Method::Dop853 { .. } => "dop853",
+            Method::Sdirk4 { .. } => "sdirk4",
+            Method::Rk4 { .. } => "rk4",
+        }
+    }
+}
+
+/// Whether an RK4 step of `step` s fits samples `spacing` s apart: at most the spacing
+/// (to 1e-9 of it). RK4 interpolates the samples between its steps, so a longer step
+/// would only interpolate what the samples are there to resolve.
+pub fn rk4_step_fits(step: f64, spacing: f64) -> bool {
+    step <= spacing * (1.0 + 1e-9)
+}
+
 impl std::fmt::Display for Method {
     /// As a grid file's `solver:` block names it: `dop853 (rtol 1e-8, atol 1e-12)`,
     /// `rk4 (step 1e-5 s)`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let (name, rtol, atol) = match *self {
-            Method::DormandPrince { rtol, atol } => ("dopri5", rtol, atol),
-            Method::Tsit5 { rtol, atol } => ("tsit5", rtol, atol),
-            Method::Dop853 { rtol, atol } => ("dop853", rtol, atol),
-            Method::Sdirk4 { rtol, atol } => ("sdirk4", rtol, atol),
-            Method::Rk4 { step } => return write!(f, "rk4 (step {step:e} s)"),
-        };
-        write!(f, "{name} (rtol {rtol:e}, atol {atol:e})")
+        match *self {
+            Method::DormandPrince { rtol, atol }
+            | Method::Tsit5 { rtol, atol }
+            | Method::Dop853 { rtol, atol }
+            | Method::Sdirk4 { rtol, atol } => {
+                write!(f, "{} (rtol {rtol:e}, atol {atol:e})", self.name())
+            }
+            Method::Rk4 { step } => write!(f, "rk4 (step {step:e} s)"),
+        }
     }
 }
 
@@ -264,14 +286,9 @@ impl Stats {
     /// `solver.method`), or `"sdirk4"` after a switch.
     pub fn final_method(&self, method: &Method) -> &'static str {
         if self.switched_at.is_some() {
-            return "sdirk4";
-        }
-        match method {
-            Method::DormandPrince { .. } => "dopri5",
-            Method::Tsit5 { .. } => "tsit5",
-            Method::Dop853 { .. } => "dop853",
-            Method::Rk4 { .. } => "rk4",
-            Method::Sdirk4 { .. } => "sdirk4",
+            "sdirk4"
+        } else {
+            method.name()
         }
     }
 }

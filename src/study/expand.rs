@@ -32,7 +32,9 @@ use crate::signal::revolutions::revolution_count;
 use crate::signal::sensor::{Sensor, CLEAN_SUFFIX};
 use crate::signal::spectrum::frequencies;
 use crate::simulate::{Sampling, CHANNELS};
-use crate::solve::{Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL, MAX_RTOL, MIN_RTOL};
+use crate::solve::{
+    rk4_step_fits, Method, SolverSettings, DEFAULT_ATOL, DEFAULT_RTOL, MAX_RTOL, MIN_RTOL,
+};
 
 /// Which effects a study simulates; anything off is not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -2099,22 +2101,19 @@ fn solver(
         Some("sdirk4") => Method::Sdirk4 { rtol, atol },
         Some("rk4") => {
             let step = positive(&s.step, Dimension::Time, "solver.step", 20e-6)?;
-            // RK4 steps at a fixed size and interpolates the samples between its
-            // steps: a step longer than the sample spacing would only interpolate
-            // the content the samples are there to resolve.
             let rule = format!(
                 "RK4's fixed step must be at most the sample spacing 1/sample_rate = {spacing} s \
                  (and the duration {duration} s): with longer steps the samples between \
                  them are only interpolated"
             );
-            if s.step.is_none() && step > spacing * (1.0 + 1e-9) {
+            if s.step.is_none() && !rk4_step_fits(step, spacing) {
                 return Err(ctx.err(
                     s.method.as_ref().map(|m| at(&m.referenced)),
                     "solver.step",
                     format!("the default step {step} s is too long: {rule}; give `step`"),
                 ));
             }
-            let ok = step <= spacing * (1.0 + 1e-9) && step <= duration;
+            let ok = rk4_step_fits(step, spacing) && step <= duration;
             Method::Rk4 {
                 step: within(&s.step, step, "solver.step", ok, rule)?,
             }
