@@ -9,6 +9,7 @@ use std::os::unix::ffi::OsStrExt;
 use std::path::Path;
 use std::sync::OnceLock;
 
+use studyrun::output::shell_word;
 use studyrun::study::Shard;
 
 /// What the handler needs, prepared before it is installed: the journal's path and
@@ -35,8 +36,8 @@ pub fn note_on_stop(grid: &Path, output: &Path, shard: Option<Shard>) {
         "\nstudyrun: stopped by a signal; the cases finished so far are kept beside {}: \
          `studyrun {} -o {}{} --resume` continues the run\n",
         output.display(),
-        grid.display(),
-        output.display(),
+        shell_word(&grid.to_string_lossy()),
+        shell_word(&output.to_string_lossy()),
         shard.map_or(String::new(), |s| format!(" --shard {s}"))
     );
     let again = "\nstudyrun: stopped by a signal before the run recorded anything; \

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use crate::output::{AttrValue, ParamValues, Status, StudyReader};
+use crate::output::{shell_word, AttrValue, DataFile, ParamValues, Status, StudyReader};
 
 /// A human-readable summary of the study file at `path`: the study, its grid,
 /// status counts and every failed case with its parameters and error.
@@ -135,21 +135,22 @@ pub fn inspect(path: &Path) -> Result<String> {
 /// finished cases are in the journal, not yet marked here), or a result file beside
 /// the journal of a run that will replace it.
 fn interrupted_run(path: &Path) -> Option<String> {
-    let name = path.to_str()?;
-    let (output, partial) = [".partial.resumed", ".partial"]
-        .iter()
-        .find_map(|suffix| name.strip_suffix(suffix))
-        .map_or((name, false), |output| (output, true));
-    let (journal, _) = super::side_paths(Path::new(output));
+    let partial = DataFile::output_of(path);
+    let output = partial
+        .as_ref()
+        .map_or(path, |(output, _)| output.as_path());
+    let (journal, _) = super::side_paths(output);
     if !journal.is_file() {
         return None;
     }
-    Some(if partial {
+    Some(if partial.is_some() {
         format!(
-            "interrupted: the partial file of {output}, whose cases are marked done only when \
+            "interrupted: the partial file of {}, whose cases are marked done only when \
              the run finishes; the journal {} records the finished ones, and \
-             `studyrun GRID -o {output} --resume` continues the run",
-            journal.display()
+             `studyrun GRID -o {} --resume` continues the run",
+            output.display(),
+            journal.display(),
+            shell_word(&output.to_string_lossy())
         )
     } else {
         format!(

@@ -394,8 +394,9 @@ pub fn command_line() -> String {
 }
 
 /// `word` as a shell would need it: as it is if plain, else single-quoted; NULs and
-/// line breaks (which would break a `history` line) escaped.
-pub(super) fn shell_word(word: &str) -> String {
+/// line breaks (which would break a `history` line) escaped. For command lines that
+/// studyrun prints or records, so that they paste back whole.
+pub fn shell_word(word: &str) -> String {
     let word = word
         .replace('\0', "\\0")
         .replace('\n', "\\n")

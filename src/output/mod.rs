@@ -86,9 +86,9 @@ pub use encode::ChunkEncoder;
 pub use error::StudyFileError;
 pub use inspect::inspect;
 pub use layout::{
-    command_line, history_line, provenance, AttrValue, Layout, Param, ParamValues, Status, Storage,
-    VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
-    REVOLUTION, STATUS, TIME, TIME_UNITS,
+    command_line, history_line, provenance, shell_word, AttrValue, Layout, Param, ParamValues,
+    Status, Storage, VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE,
+    REFERENCE_INDEX, REPLICATE, REVOLUTION, STATUS, TIME, TIME_UNITS,
 };
 pub use lock::OutputLock;
 pub use merge::merge;

@@ -14,15 +14,27 @@ pub enum DataFile {
 }
 
 impl DataFile {
+    /// What this partial file's name adds to the result file's.
+    fn suffix(self) -> &'static str {
+        match self {
+            Self::Partial => ".partial",
+            Self::Resumed => ".partial.resumed",
+        }
+    }
+
     /// The partial file of this name for the result file `output`.
     pub fn path(self, output: &Path) -> PathBuf {
-        with_suffix(
-            output,
-            match self {
-                Self::Partial => ".partial",
-                Self::Resumed => ".partial.resumed",
-            },
-        )
+        with_suffix(output, self.suffix())
+    }
+
+    /// The result file whose partial file `path` is, and which of the two it is;
+    /// `None` when `path` names no partial file.
+    pub fn output_of(path: &Path) -> Option<(PathBuf, Self)> {
+        let name = path.to_str()?;
+        [Self::Partial, Self::Resumed].into_iter().find_map(|d| {
+            name.strip_suffix(d.suffix())
+                .map(|output| (PathBuf::from(output), d))
+        })
     }
 
     /// The other partial file: where a run resumed from this one writes.
@@ -66,4 +78,21 @@ pub fn side_paths(output: &Path) -> (PathBuf, PathBuf) {
 /// Where a resume writes the journal that replaces `output`'s (`OUT.h5.journal.new`).
 pub fn new_journal_path(output: &Path) -> PathBuf {
     with_suffix(output, ".journal.new")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_partial_file_names_its_result_file() {
+        for d in [DataFile::Partial, DataFile::Resumed] {
+            let output = Path::new("runs/my study.h5");
+            assert_eq!(
+                DataFile::output_of(&d.path(output)),
+                Some((output.to_path_buf(), d))
+            );
+        }
+        assert_eq!(DataFile::output_of(Path::new("runs/out.h5")), None);
+    }
 }
