@@ -34,7 +34,7 @@ if __package__ in (None, ""):  # run as a script: make `analysis` importable
 
 import numpy as np  # noqa: E402
 
-from analysis import diagnosis, figures  # noqa: E402
+from analysis import figures  # noqa: E402
 from analysis import diagnosis_figures as dfig  # noqa: E402
 from analysis.studyfile import (  # noqa: E402
     constant_rpm,
@@ -43,6 +43,7 @@ from analysis.studyfile import (  # noqa: E402
     open_study,
     select_cases,
     study_file_or_exit,
+    text,
 )
 
 METRIC_KINDS = ("rms_deviation", "peak_deviation")
@@ -55,7 +56,6 @@ INDICATORS = ("rms", "peak", "crest_factor", "kurtosis", "skewness", "impulse_fa
 GROUP_KEYS = ("location", "rpm", "waviness_amplitude")
 DEFECT_PARAMETERS = ("defect_race", "defect_angle", "defect_width", "defect_depth")
 """The first defect's parameters (docs/result-file.md): not applicable to a bearing without one."""
-HEALTHY = "none"
 
 
 class Index:
@@ -85,7 +85,7 @@ def _values_text(ds, name, cases=None):
     """The distinct values of per-case variable `name` (among `cases`), for a message."""
     values = ds[name].values if cases is None else ds[name].values[cases]
     if values.dtype.kind in "USO":
-        shown = sorted({diagnosis.text(v) for v in values})
+        shown = sorted({text(v) for v in values})
     else:
         shown = [f"{v:g}" for v in np.unique(values.astype(float))]
     return ", ".join(shown[:20]) + (", ..." if len(shown) > 20 else "") if shown else "(no case)"
@@ -136,7 +136,7 @@ def no_defect(ds):
     the file has the label, else its `defect_depth` is 0 (a zero-depth defect is no
     defect, docs/grid-file.md); without either variable, no case has a defect."""
     if "fault" in ds:
-        return np.array([diagnosis.text(v) == HEALTHY for v in ds["fault"].values], dtype=bool)
+        return np.array([text(v) == dfig.HEALTHY for v in ds["fault"].values], dtype=bool)
     if "defect_depth" in ds:
         return ds["defect_depth"].values == 0
     return np.ones(ds.sizes["case"], dtype=bool)
@@ -158,7 +158,7 @@ def mark_healthy(ds):
         values = ds[name].values.copy()
         if values.dtype.kind in "USO":
             values = values.astype(object)
-            values[healthy] = HEALTHY
+            values[healthy] = dfig.HEALTHY
         else:
             values = values.astype(float)
             values[healthy] = np.nan
@@ -275,8 +275,8 @@ def healthy_repeats(ds, cases):
 
 def slug(ds, params):
     """A file-name fragment for a parameter combination, e.g. crank_ground_300rpm_4um."""
-    text = "_".join(figures.value_text(ds, k, v).replace(" ", "") for k, v in params.items())
-    return text.replace("µ", "u").replace("/", "-")
+    words = "_".join(figures.value_text(ds, k, v).replace(" ", "") for k, v in params.items())
+    return words.replace("µ", "u").replace("/", "-")
 
 
 def render_metrics(ds, cases, outdir, index, dpi):
@@ -317,7 +317,7 @@ def render_metrics(ds, cases, outdir, index, dpi):
 
 def render_group(ds, params, counts, outdir, index, channels, dpi):
     """Panels and spectra of one parameter combination, up to 4 ball counts a figure."""
-    text = figures.describe(ds, params)
+    words = figures.describe(ds, params)
     fixed = {k: v for k, v in params.items() if k not in GROUP_KEYS}
     chunks = [counts[i : i + figures.MAX_PANELS] for i in range(0, len(counts), figures.MAX_PANELS)]
     for chunk in chunks:
@@ -327,24 +327,24 @@ def render_group(ds, params, counts, outdir, index, channels, dpi):
         for channel in channels:
             t0, t1 = figures.default_window(ds, params["rpm"])
             if channel not in ds:
-                index.note(f"{channel}, {text}: not shown (the file does not store it: see `output.series`).")
+                index.note(f"{channel}, {words}: not shown (the file does not store it: see `output.series`).")
                 continue
             try:
                 out = figures.paper_panels(*args, channel, outdir / f"panels_{channel}_{name}.png",
                                            select=fixed, ball_counts=chunk, dpi=dpi)
                 index.figure(out, f"{figures.CHANNEL_TEXT[channel]} against time, t = {t0:g}–{t1:g} s, "
-                                  f"N_b = {balls} (ideal mechanism dashed): {text}.")
+                                  f"N_b = {balls} (ideal mechanism dashed): {words}.")
                 if int(ds.attrs.get("decimate", 1)) != 1:
-                    index.note(f"spectra of {channel}, {text}: not shown (the ideal mechanism's spectrum "
+                    index.note(f"spectra of {channel}, {words}: not shown (the ideal mechanism's spectrum "
                                "needs its full-rate series; the file stores every "
                                f"{int(ds.attrs['decimate'])}th sample, `output.decimate`).")
                 elif f"{channel}_spectrum" in ds:
                     out = figures.spectra(*args, channel, outdir / f"spectrum_{channel}_{name}.png",
                                           select=fixed, ball_counts=chunk, dpi=dpi)
                     index.figure(out, f"amplitude spectra of {figures.CHANNEL_TEXT[channel]}, N_b = {balls}, "
-                                      f"ideal mechanism grey, characteristic frequencies marked: {text}.")
+                                      f"ideal mechanism grey, characteristic frequencies marked: {words}.")
             except ValueError as e:  # e.g. an ideal-mechanism series the file does not store
-                index.note(f"{channel}, {text}: not shown ({e}).")
+                index.note(f"{channel}, {words}: not shown ({e}).")
 
 
 def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
@@ -383,7 +383,7 @@ def speed_text(ds, case):
     rpm = constant_rpm(ds, case)
     if np.isfinite(rpm):
         return f"{rpm:g} rpm"
-    profile = diagnosis.text(ds["speed_profile"].values[case])
+    profile = text(ds["speed_profile"].values[case])
     if profile == "ramp":
         low, high = (float(ds[k].values[case]) for k in ("speed_from", "speed_to"))
         return f"{'run-up' if high > low else 'run-down'} {low:g}→{high:g} rpm"

@@ -241,9 +241,9 @@ def written_times(ds):
     """`ds` with `time` put back to the times studyrun writes, `j·decimate / sample_rate`,
     when every time is within TIME_REWRITE_TOLERANCE of them (as `studyrun merge` reads
     them); otherwise, or without `time`, `ds` as it is."""
-    if "time" not in ds.coords or "sample_rate" not in ds.attrs:
+    if "time" not in ds.coords or "sample_rate" not in ds.attrs or "decimate" not in ds.attrs:
         return ds
-    steps = np.arange(ds.sizes["time"], dtype=np.int64) * int(ds.attrs.get("decimate", 1))
+    steps = np.arange(ds.sizes["time"], dtype=np.int64) * int(ds.attrs["decimate"])
     written = steps.astype(np.float64) / float(ds.attrs["sample_rate"])
     if not np.all(np.abs(ds["time"].values - written) <= TIME_REWRITE_TOLERANCE):
         return ds

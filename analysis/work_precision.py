@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from analysis.studyfile import study_file_or_exit  # noqa: E402
+from analysis.studyfile import OPEN_OPTIONS, study_file_or_exit  # noqa: E402
 
 ACCURACY_VARIABLES = ("method", "rtol", "step", "horizon")
 """Per-case variables only an accuracy file has (which integrator, its tolerance or step,
@@ -98,7 +98,7 @@ def main(argv=None):
     a = p.parse_args(argv)
     study_file_or_exit("work_precision", a.file, needs=ACCURACY_VARIABLES + (f"{a.error}_error_{a.channel}",),
                        kind="an accuracy file (from `studyrun accuracy GRID.yaml`)")
-    with xr.open_dataset(a.file, engine="h5netcdf") as ds:
+    with xr.open_dataset(a.file, **OPEN_OPTIONS) as ds:
         print(plot(ds.load(), a.out, a.error, a.channel, a.cost, a.stat, a.chaotic))
 
 

@@ -286,7 +286,7 @@ impl Track {
     ) -> Vec<Track> {
         let ball_radius = 0.5 * ball_diameter;
         let geometric = defect.geometric_depth(ball_diameter);
-        let floor = defect.depth.min(geometric);
+        let floor = defect.effective_depth(ball_diameter);
         // Where the depth, not the width, limits the ball, a rounded ramp reaches
         // the floor at d*; else only at the centre, where both edges hold the ball:
         // the whole defect is ramp (its value at the centre is the floor).

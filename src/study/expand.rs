@@ -1456,10 +1456,7 @@ fn finish_case(
             None => ctx.err(
                 None,
                 &e.field,
-                format!(
-                    "{} is not allowed: {} (case {id}, default value)",
-                    e.value, e.allowed
-                ),
+                format!("{} (case {id}, default value)", e.refusal()),
             ),
         }
     })?;
