@@ -80,12 +80,13 @@ pub mod run;
 pub mod signal;
 pub mod simulate;
 pub mod solve;
+pub mod speed;
 pub mod study;
 
-pub use error::{ModelError, ParamError, RunError};
+pub use error::{ModelError, ParamError};
 pub use mechanism::{CartesianSliderCrank, CaseParams, Location, MechanismParams, SliderCrank};
-pub use output::{inspect, merge, StudyReader};
-pub use run::{run as run_study, RunOptions, RunSummary};
+pub use output::{inspect, merge, OutputError, StudyReader};
+pub use run::{run as run_study, RunError, RunOptions, RunSummary};
 pub use simulate::{simulate, CaseError, CaseOutput, Sampling};
 pub use solve::{Method, SolverSettings};
 pub use study::{Shard, Study, StudyError};

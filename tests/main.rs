@@ -25,6 +25,7 @@ mod ideal_mechanism;
 mod integrators;
 mod interop;
 mod isa;
+mod layering;
 mod orders;
 mod output_selection;
 mod parity;

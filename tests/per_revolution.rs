@@ -114,7 +114,7 @@ fn revolutions_are_counted_from_the_crank_angle() {
     let slow = "name: slow\nduration: 0.6\nsample_rate: 10000\ntransient: \"0.2 s\"\nspeed: {profile: ramp, from: \"100 rpm\", to: \"100 rpm\", over: \"0.6 s\"}\ngrid:\n  location: [crank_ground]\n";
     let study = load(slow);
     assert_eq!(study.revolutions, 0);
-    let layout = studyrun::output::study_layout(&study, &[], None);
+    let layout = studyrun::study::study_layout(&study, &[], None);
     assert!(layout.revolutions.is_empty() && layout.revolution_metrics.is_empty());
 }
 

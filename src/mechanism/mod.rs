@@ -7,10 +7,9 @@ mod cartesian;
 mod model;
 mod params;
 mod slider_crank;
-mod speed;
 
+pub use crate::speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
 pub use params::{CaseParams, Housing, Location, MechanismParams, Sample, GRAVITY};
 pub use slider_crank::{Energy, SliderCrank, MAX_BAND};
-pub use speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};

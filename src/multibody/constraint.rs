@@ -6,7 +6,7 @@
 //! `Φq q̈ = γ` along any motion that satisfies the constraint.
 
 use super::body::{BodyRef, Pose};
-use crate::mechanism::CrankDrive;
+use crate::speed::CrankDrive;
 
 /// One joint or driver.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,8 @@
-//! The error type of study files.
+//! The errors of study files: [`StudyFileError`] (creating, writing or reading one file)
+//! and [`OutputError`] (what the file operations around it, lock, overwrite checks and
+//! merge, return).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::dimension_scales::ScaleError;
 
@@ -93,5 +95,69 @@ impl<T> AtVariable<T> for hdf5::Result<T> {
             variable: variable.to_owned(),
             source,
         })
+    }
+}
+
+/// Why an operation on study files (taking the lock, checking what an output would
+/// replace, merging shards) could not be done. Failed *cases* are not errors: they
+/// are recorded in the file with their message.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// A file operation failed.
+    #[error("cannot {action} {}: {source}", path.display())]
+    Io {
+        /// What was tried: `create`, `remove`, `rename … to`, ….
+        action: String,
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// Reading or writing a study file failed (the error names the file).
+    #[error("{source}")]
+    File {
+        /// The study file.
+        path: PathBuf,
+        /// What went wrong.
+        source: Box<StudyFileError>,
+    },
+    /// Another process is writing the same output.
+    #[error("{} is in use by another studyrun (pid {pid}, lock {}); wait for it to finish or stop it", output.display(), lock.display())]
+    Locked {
+        /// The output file.
+        output: PathBuf,
+        /// The lock file.
+        lock: PathBuf,
+        /// The process holding the lock (as it wrote it; 0 if unknown).
+        pid: u32,
+    },
+    /// What is on disk, or the request itself, does not allow the operation; the
+    /// message says why and what to do.
+    #[error("{0}")]
+    Refused(String),
+}
+
+impl OutputError {
+    /// An [`OutputError::Io`] for `action` on `path`.
+    pub(crate) fn io(
+        action: impl Into<String>,
+        path: &Path,
+    ) -> impl FnOnce(std::io::Error) -> Self {
+        let (action, path) = (action.into(), path.to_path_buf());
+        move |source| Self::Io {
+            action,
+            path,
+            source,
+        }
+    }
+
+    /// An [`OutputError::File`] for `path`.
+    pub(crate) fn file(path: &Path) -> impl FnOnce(StudyFileError) -> Self {
+        let path = path.to_path_buf();
+        move |source| Self::File {
+            path,
+            source: Box::new(source),
+        }
     }
 }

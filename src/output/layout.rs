@@ -5,6 +5,8 @@
 use std::collections::HashSet;
 use std::time::SystemTime;
 
+pub use crate::signal::VarSpec;
+
 /// Name of the case dimension and its coordinate variable (case ids, stored as int32).
 pub const CASE: &str = "case";
 /// Name of the time dimension and its coordinate variable (f64, s from the start of
@@ -60,33 +62,6 @@ pub const MAX_ID: u64 = i32::MAX as u64;
 
 /// Largest chunk HDF5 accepts (bytes): a chunk is one case's series or spectrum.
 const MAX_CHUNK_BYTES: usize = u32::MAX as usize;
-
-/// Name and CF-style metadata of one variable.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VarSpec {
-    /// Variable name in the file: non-empty, no `/`, no NUL, not starting with `_`
-    /// (netCDF reserves those), not one of the dimension or built-in names.
-    pub name: String,
-    /// CF/UDUNITS units string, e.g. `m s-2`; `1` for dimensionless.
-    pub units: String,
-    /// Human-readable description (CF `long_name`).
-    pub long_name: String,
-}
-
-impl VarSpec {
-    /// A spec from its three strings.
-    pub fn new(
-        name: impl Into<String>,
-        units: impl Into<String>,
-        long_name: impl Into<String>,
-    ) -> Self {
-        Self {
-            name: name.into(),
-            units: units.into(),
-            long_name: long_name.into(),
-        }
-    }
-}
 
 /// The values of a parameter, one per case (or per reference).
 #[derive(Debug, Clone)]

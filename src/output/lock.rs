@@ -15,7 +15,7 @@ use std::os::unix::io::AsRawFd;
 use std::path::{Path, PathBuf};
 
 use super::with_suffix;
-use crate::error::RunError;
+use super::OutputError;
 
 /// An exclusive hold on an output's files, released on drop.
 #[derive(Debug)]
@@ -26,8 +26,8 @@ pub struct OutputLock {
 
 impl OutputLock {
     /// Takes the lock of `output` (`OUT.h5.lock`) without waiting; refuses with
-    /// [`RunError::Locked`] naming the holder's pid when another process has it.
-    pub fn acquire(output: &Path) -> Result<Self, RunError> {
+    /// [`OutputError::Locked`] naming the holder's pid when another process has it.
+    pub fn acquire(output: &Path) -> Result<Self, OutputError> {
         let path = with_suffix(output, ".lock");
         loop {
             let mut file = OpenOptions::new()
@@ -36,16 +36,16 @@ impl OutputLock {
                 .create(true)
                 .truncate(false)
                 .open(&path)
-                .map_err(RunError::io("create the lock file", &path))?;
+                .map_err(OutputError::io("create the lock file", &path))?;
             // SAFETY: `flock` on a descriptor this function owns.
             if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
                 let err = std::io::Error::last_os_error();
                 if err.raw_os_error() != Some(libc::EWOULDBLOCK) {
-                    return Err(RunError::io("lock", &path)(err));
+                    return Err(OutputError::io("lock", &path)(err));
                 }
                 let mut text = String::new();
                 let _ = file.read_to_string(&mut text);
-                return Err(RunError::Locked {
+                return Err(OutputError::Locked {
                     output: output.to_path_buf(),
                     lock: path,
                     pid: text.trim().parse().unwrap_or(0),
@@ -63,7 +63,7 @@ impl OutputLock {
             file.set_len(0)
                 .and_then(|()| file.seek(SeekFrom::Start(0)))
                 .and_then(|_| file.write_all(pid.as_bytes()))
-                .map_err(RunError::io("write the lock file", &path))?;
+                .map_err(OutputError::io("write the lock file", &path))?;
             return Ok(Self { file, path });
         }
     }
@@ -89,7 +89,7 @@ mod tests {
         let out = dir.path().join("a.h5");
         let first = OutputLock::acquire(&out).unwrap();
         match OutputLock::acquire(&out) {
-            Err(RunError::Locked { pid, .. }) => assert_eq!(pid, std::process::id()),
+            Err(OutputError::Locked { pid, .. }) => assert_eq!(pid, std::process::id()),
             other => panic!("expected Locked, got {other:?}"),
         }
         drop(first);

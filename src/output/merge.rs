@@ -5,16 +5,16 @@ use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use super::layout::shell_word;
+use super::OutputError;
 use super::{history_line, side_paths, OutputLock, VarSpec};
-use crate::error::RunError;
 use crate::output::{AttrValue, CaseRecord, Layout, ParamValues, Status, StudyReader, StudyWriter};
 
 /// Refuses with `message` unless `ok`.
-fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), RunError> {
+fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), OutputError> {
     if ok {
         Ok(())
     } else {
-        Err(RunError::Refused(message()))
+        Err(OutputError::Refused(message()))
     }
 }
 
@@ -91,7 +91,7 @@ fn positions(want: &[VarSpec], have: &[VarSpec]) -> Vec<usize> {
 /// tools rewrote are merged too: variables are matched by name, whatever their
 /// order. The merged file's variables are in the first shard's order; its `history`
 /// is the first shard's with the merge's line on top. Returns the number of cases.
-pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, RunError> {
+pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, OutputError> {
     ensure(!shards.is_empty(), || {
         "merge needs at least one shard file".into()
     })?;
@@ -120,7 +120,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             _ => p == q,
         };
         if let Some(q) = shards[..k].iter().find(|q| same(q)) {
-            return Err(RunError::Refused(format!(
+            return Err(OutputError::Refused(format!(
                 "{} is given twice (also as {})",
                 p.display(),
                 q.display()
@@ -138,10 +138,10 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
     super::overwrite::check_output(output, force, &inputs)?;
     let readers: Vec<StudyReader> = shards
         .iter()
-        .map(|p| StudyReader::open(p).map_err(RunError::file(p)))
+        .map(|p| StudyReader::open(p).map_err(OutputError::file(p)))
         .collect::<Result<_, _>>()?;
     for (r, path) in readers.iter().zip(shards) {
-        let statuses = r.statuses().map_err(RunError::file(path))?;
+        let statuses = r.statuses().map_err(OutputError::file(path))?;
         let pending = statuses.iter().filter(|&&s| s == Status::Pending).count();
         ensure(pending == 0, || {
             format!(
@@ -164,7 +164,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             },
         )?;
         if let Some(difference) = layout_difference(r.layout(), first) {
-            return Err(RunError::Refused(format!(
+            return Err(OutputError::Refused(format!(
                 "{} has a different layout than {}: {difference}",
                 path.display(),
                 shards[0].display()
@@ -186,7 +186,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         .collect();
     order.sort_unstable();
     if let Some(w) = order.windows(2).find(|w| w[0].0 == w[1].0) {
-        return Err(RunError::Refused(format!(
+        return Err(OutputError::Refused(format!(
             "case {} is in both {} and {}",
             w[0].0,
             shards[w[0].1].display(),
@@ -196,7 +196,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
     let expected = match attr(&readers[0], "study_cases") {
         Some(AttrValue::I64(n)) => n as usize,
         _ => {
-            return Err(RunError::Refused(format!(
+            return Err(OutputError::Refused(format!(
                 "{} has no study_cases attribute; is it a studyrun study file?",
                 shards[0].display()
             )))
@@ -238,7 +238,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
         .collect();
     // The cases are read below: check first that reading them cannot crash.
     for (r, path) in readers.iter().zip(shards) {
-        r.check_cases().map_err(RunError::file(path))?;
+        r.check_cases().map_err(OutputError::file(path))?;
     }
 
     let mut layout: Layout = first.clone();
@@ -291,21 +291,21 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
             .push(("history".to_owned(), AttrValue::Str(line))),
     }
     let (_, partial) = side_paths(output);
-    let to_partial = RunError::file(&partial);
-    let mut writer = StudyWriter::create(&partial, &layout).map_err(RunError::file(&partial))?;
+    let to_partial = OutputError::file(&partial);
+    let mut writer = StudyWriter::create(&partial, &layout).map_err(OutputError::file(&partial))?;
     for k in 0..layout.reference_ids.len() {
         let series = readers[0]
             .read_reference(k)
-            .map_err(RunError::file(&shards[0]))?;
+            .map_err(OutputError::file(&shards[0]))?;
         let refs: Vec<&[f64]> = series.iter().map(Vec::as_slice).collect();
         writer
             .write_reference(k, &refs)
-            .map_err(RunError::file(&partial))?;
+            .map_err(OutputError::file(&partial))?;
     }
     for (row, &(_, s, src)) in order.iter().enumerate() {
         let c = readers[s]
             .read_case(src)
-            .map_err(RunError::file(&shards[s]))?;
+            .map_err(OutputError::file(&shards[s]))?;
         let o = &shard_order[s];
         let series: Vec<&[f64]> = o.series.iter().map(|&i| c.series[i].as_slice()).collect();
         let spectra: Vec<&[f64]> = o.spectra.iter().map(|&i| c.spectra[i].as_slice()).collect();
@@ -338,10 +338,10 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ru
                     message: &c.message,
                 },
             )
-            .map_err(RunError::file(&partial))?;
+            .map_err(OutputError::file(&partial))?;
     }
     writer.finish().map_err(to_partial)?;
-    std::fs::rename(&partial, output).map_err(RunError::io(
+    std::fs::rename(&partial, output).map_err(OutputError::io(
         format!("rename {} to", partial.display()),
         output,
     ))?;

@@ -58,7 +58,7 @@
 //! deflated itself. 1-D variables are contiguous and uncompressed.
 //! Link and attribute creation order are tracked, as netCDF-4 does.
 //!
-//! [`study_layout`] gives the layout of a study's file, [`merge`] combines shard files
+//! `crate::study::study_layout` gives the layout of a study's file, [`merge`] combines shard files
 //! and [`inspect`] summarises one.
 
 mod attributes;
@@ -77,13 +77,12 @@ mod paths;
 mod reader;
 mod reserve;
 mod shuffle;
-mod study_layout;
 mod text;
 mod writer;
 
 pub use dimension_scales::ScaleError;
 pub use encode::ChunkEncoder;
-pub use error::StudyFileError;
+pub use error::{OutputError, StudyFileError};
 pub use inspect::inspect;
 pub use layout::{
     command_line, history_line, provenance, shell_word, AttrValue, Layout, Param, ParamValues,
@@ -94,8 +93,4 @@ pub use lock::OutputLock;
 pub use merge::merge;
 pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
 pub use reader::{CaseData, StudyReader};
-pub use study_layout::{
-    fnv1a, stored_reference_channels, study_layout, study_metric_specs, StudyFingerprint,
-    MODEL_CONVENTIONS, REFERENCE_CHANNELS,
-};
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

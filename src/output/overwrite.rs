@@ -14,7 +14,7 @@ use std::fs::Metadata;
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::Path;
 
-use crate::error::RunError;
+use super::OutputError;
 use crate::output::StudyReader;
 
 /// What kind of thing `m` is, for messages.
@@ -40,25 +40,25 @@ fn kind(m: &Metadata) -> &'static str {
 /// Checks what is at `path`, a file a command is about to create, replace or remove:
 /// nothing, or a regular file that is none of `inputs`. Returns whether a regular file
 /// is there. `what` names the path's role in messages (`the output`, `the journal`).
-pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, RunError> {
+pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, OutputError> {
     let m = match std::fs::symlink_metadata(path) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
-        Err(e) => return Err(RunError::io("inspect", path)(e)),
+        Err(e) => return Err(OutputError::io("inspect", path)(e)),
     };
     let t = m.file_type();
     if t.is_symlink() {
         let target = std::fs::read_link(path)
             .map(|t| format!(" to {}", t.display()))
             .unwrap_or_default();
-        return Err(RunError::Refused(format!(
+        return Err(OutputError::Refused(format!(
             "{} ({what}) is a symbolic link{target}; studyrun neither writes through nor \
              replaces links: give the path of a regular file",
             path.display()
         )));
     }
     if !t.is_file() {
-        return Err(RunError::Refused(format!(
+        return Err(OutputError::Refused(format!(
             "{} ({what}) is {}, not a regular file; studyrun writes regular files only and \
              replaces nothing else{}",
             path.display(),
@@ -73,7 +73,7 @@ pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, Run
     for input in inputs {
         if let Ok(i) = std::fs::metadata(input) {
             if i.dev() == m.dev() && i.ino() == m.ino() {
-                return Err(RunError::Refused(format!(
+                return Err(OutputError::Refused(format!(
                     "{} ({what}) is the input {} itself; choose another output",
                     path.display(),
                     input.display()
@@ -86,10 +86,10 @@ pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, Run
 
 /// Checks that the regular file at `output` is a studyrun study file, the only kind
 /// `--force` replaces.
-pub fn check_replaceable(output: &Path) -> Result<(), RunError> {
+pub fn check_replaceable(output: &Path) -> Result<(), OutputError> {
     match StudyReader::open(output) {
         Ok(_) => Ok(()),
-        Err(e) => Err(RunError::Refused(format!(
+        Err(e) => Err(OutputError::Refused(format!(
             "{} is not a studyrun result file, and --force replaces only those ({}); \
              nothing was changed: remove it yourself if you mean to, or choose another output",
             output.display(),
@@ -101,14 +101,14 @@ pub fn check_replaceable(output: &Path) -> Result<(), RunError> {
 /// Checks `output` for a command that writes it from scratch (`merge`, `accuracy`):
 /// refuses what [`check_path`] refuses, an existing file without `force`, and with
 /// `force` anything but a study file. Returns whether a file is there to replace.
-pub fn check_output(output: &Path, force: bool, inputs: &[&Path]) -> Result<bool, RunError> {
+pub fn check_output(output: &Path, force: bool, inputs: &[&Path]) -> Result<bool, OutputError> {
     let exists = check_path(output, "the output", inputs)?;
     for (side, what) in side_files(output) {
         check_path(&side, what, inputs)?;
     }
     if exists {
         if !force {
-            return Err(RunError::Refused(format!(
+            return Err(OutputError::Refused(format!(
                 "{} exists; use --force to overwrite it",
                 output.display()
             )));

@@ -2,13 +2,13 @@
 
 use super::stats::thread_cpu;
 use crate::mechanism::{CaseParams, Location};
-use crate::output::study_metric_specs;
 use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::revolutions::{revolution_metric_specs, revolution_metrics, revolution_windows};
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis, OrderAnalysis};
 use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
+use crate::study::study_metric_specs;
 use crate::study::{Case, Replicates, Study};
 
 /// What one case contributes to the file, owned so it can cross threads.

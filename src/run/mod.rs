@@ -13,6 +13,7 @@
 //! and encoded on its own, in one thread. [`RunStats`] says where the time went.
 
 mod case;
+mod error;
 mod journal;
 mod order;
 mod progress;
@@ -20,6 +21,7 @@ mod stats;
 
 pub use case::check_eccentricity;
 use case::run_case;
+pub use error::RunError;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
 pub use stats::RunStats;
@@ -32,16 +34,16 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::error::RunError;
+use crate::output::OutputError;
 use crate::output::{
-    new_journal_path, overwrite, side_paths, stored_reference_channels, study_layout, ChunkEncoder,
-    DataFile, Layout, OutputLock, Status, StudyFingerprint, StudyReader, StudyWriter,
+    new_journal_path, overwrite, side_paths, ChunkEncoder, DataFile, Layout, OutputLock, Status,
+    StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
 use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
-use crate::study::Study;
+use crate::study::{stored_reference_channels, study_layout, Study, StudyFingerprint};
 
 /// How to run. The default writes `study.h5` in the working directory with one
 /// worker per core, refusing to replace anything, with progress on stderr.
@@ -105,16 +107,18 @@ fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
 }
 
 /// Removes the file at `path` if there is one.
-fn remove_if_exists(path: &Path) -> Result<(), RunError> {
+fn remove_if_exists(path: &Path) -> Result<(), OutputError> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(RunError::io("remove", path)(e)),
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(OutputError::io("remove", path)(e))
+        }
         _ => Ok(()),
     }
 }
 
 /// Renames `from` to `to` (atomic within a file system).
-fn rename(from: &Path, to: &Path) -> Result<(), RunError> {
-    std::fs::rename(from, to).map_err(RunError::io(format!("rename {} to", from.display()), to))
+fn rename(from: &Path, to: &Path) -> Result<(), OutputError> {
+    std::fs::rename(from, to).map_err(OutputError::io(format!("rename {} to", from.display()), to))
 }
 
 /// The ideal-mechanism runs every case is compared with.
@@ -188,7 +192,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         Some(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
         None => (
             JournalWriter::create(&journal_path, &header, data)
-                .map_err(RunError::io("create", &journal_path))?,
+                .map_err(OutputError::io("create", &journal_path))?,
             Replayed::default(),
         ),
     };
@@ -216,11 +220,11 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         let cpu = thread_cpu();
         let before = rec
             .write_to(&mut writer)
-            .map_err(RunError::file(writer.path()))?;
+            .map_err(OutputError::file(writer.path()))?;
         let cpu_hdf5 = thread_cpu();
         journal
             .write(rec, before)
-            .map_err(RunError::io("append to", &journal_path))?;
+            .map_err(OutputError::io("append to", &journal_path))?;
         tally.record(rec, cpu, cpu_hdf5, &layout);
         progress.case_done(rec.status() != Status::Ok);
         Ok(())
@@ -229,11 +233,11 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     progress.finish();
     let partial_path = data.path(&opts.output);
     let cpu = thread_cpu();
-    writer.finish().map_err(RunError::file(&partial_path))?;
+    writer.finish().map_err(OutputError::file(&partial_path))?;
     tally.stats.finish = thread_cpu() - cpu;
     rename(&partial_path, &opts.output)?;
     drop(journal);
-    std::fs::remove_file(&journal_path).map_err(RunError::io("remove", &journal_path))?;
+    std::fs::remove_file(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
     Ok(RunSummary {
         cases: rows.len(),
         ok: tally.ok,
@@ -285,7 +289,7 @@ fn decide_start(
                 Err(e) => return Err(e.into()),
             }
         } else if !opts.force {
-            return Err(RunError::Refused(format!(
+            return Err(RunError::refused(format!(
                 "{} holds an interrupted run; use --resume to continue it or --force to start over",
                 journal_path.display()
             )));
@@ -293,7 +297,7 @@ fn decide_start(
     }
     if exists && !opts.force {
         if !opts.resume {
-            return Err(RunError::Refused(format!(
+            return Err(RunError::refused(format!(
                 "{} exists; use --force to overwrite it",
                 output.display()
             )));
@@ -333,7 +337,7 @@ fn complete_result(
 ) -> Result<RunSummary, RunError> {
     let output = &opts.output;
     let other = |why: &str| {
-        RunError::Refused(format!(
+        RunError::refused(format!(
             "{} is not a complete result of this study{}: {why}; \
              use --force to replace it or choose another output",
             output.display(),
@@ -353,7 +357,7 @@ fn complete_result(
     if text("shard").unwrap_or_default() != opts.shard.map_or(String::new(), |s| s.to_string()) {
         return Err(other("it holds another shard"));
     }
-    let statuses = reader.statuses().map_err(RunError::file(output))?;
+    let statuses = reader.statuses().map_err(OutputError::file(output))?;
     if statuses.len() != n_rows || statuses.contains(&Status::Pending) {
         return Err(other("it has pending cases"));
     }
@@ -389,7 +393,7 @@ fn create_file(
     let (references, writer) = std::thread::scope(|scope| {
         let references = scope.spawn(|| run_references(study));
         let writer =
-            StudyWriter::create(&partial_path, layout).map_err(RunError::file(&partial_path));
+            StudyWriter::create(&partial_path, layout).map_err(OutputError::file(&partial_path));
         (joined(references), writer)
     });
     let (references, mut writer) = (references?, writer?);
@@ -402,7 +406,7 @@ fn create_file(
         let series: Vec<&[f64]> = series.iter().map(Vec::as_slice).collect();
         writer
             .write_reference(k, &series)
-            .map_err(RunError::file(&partial_path))?;
+            .map_err(OutputError::file(&partial_path))?;
     }
     stats.create = thread_cpu() - cpu;
     Ok((writer, references, data))
@@ -554,14 +558,14 @@ fn replay(
     let new_journal_path = new_journal_path(output);
     let old = reader.data_file().path(output);
     let old_data = std::fs::File::open(&old).map_err(|e| {
-        RunError::Refused(format!(
+        RunError::refused(format!(
             "cannot open {}, the partial file that holds the journal's cases ({e}); \
              run with --force to start over",
             old.display()
         ))
     })?;
     let mut journal = JournalWriter::create(&new_journal_path, header, reader.data_file().other())
-        .map_err(RunError::io("create", &new_journal_path))?;
+        .map_err(OutputError::io("create", &new_journal_path))?;
     let mut journaled = HashSet::new();
     let mut replayed = Replayed::default();
     while let Some(entry) = reader.next_entry() {
@@ -575,10 +579,10 @@ fn replay(
         };
         let before = rec
             .write_to(writer)
-            .map_err(RunError::file(writer.path()))?;
+            .map_err(OutputError::file(writer.path()))?;
         journal
             .write(&rec, before)
-            .map_err(RunError::io("append to", &new_journal_path))?;
+            .map_err(OutputError::io("append to", &new_journal_path))?;
         replayed.done.insert(rec.row());
         if rec.status() == Status::Ok {
             replayed.ok += 1
@@ -589,7 +593,7 @@ fn replay(
     replayed.journaled = journaled.len();
     rename(&new_journal_path, &journal_path)?;
     drop(old_data);
-    std::fs::remove_file(&old).map_err(RunError::io("remove", &old))?;
+    std::fs::remove_file(&old).map_err(OutputError::io("remove", &old))?;
     Ok((journal, replayed))
 }
 

@@ -14,11 +14,11 @@ pub mod replicates;
 pub mod revolutions;
 pub mod sensor;
 pub mod spectrum;
+mod variable;
 
 use std::ops::Range;
 
 use crate::mechanism::CaseParams;
-use crate::output::VarSpec;
 use crate::simulate::CaseOutput;
 use channel::AnalysisChannel;
 use envelope::{EnvelopePlan, EnvelopeSettings};
@@ -27,6 +27,7 @@ use indicators::{band_energy, Indicators, INDICATOR_NAMES};
 use metrics::{vibration_metrics, Deviation};
 use order::{AngleResampling, OrderSettings};
 use spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
+pub use variable::VarSpec;
 
 /// Channels whose deviation from the ideal mechanism is a metric.
 const DEVIATION_CHANNELS: [(&str, &str); 3] = [

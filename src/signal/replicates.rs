@@ -2,8 +2,8 @@
 //! metric per replicate, its mean, standard deviation and 95 % interval over the
 //! replicates, and the predictability horizon where the replicates part.
 
-use crate::output::VarSpec;
 use crate::signal::metric_specs;
+use crate::signal::VarSpec;
 
 /// Relative separation (of the base run's slider-acceleration range) that ends the
 /// predictability horizon.

@@ -8,7 +8,7 @@ use std::ops::Range;
 use super::metric_specs;
 use super::metrics::vibration_metrics;
 use crate::mechanism::CrankDrive;
-use crate::output::VarSpec;
+use crate::signal::VarSpec;
 use crate::simulate::{CaseOutput, Sampling};
 
 /// Slack (revolutions) with which a crank angle counts as having reached a whole

@@ -11,9 +11,9 @@
 
 use std::ops::Range;
 
-use crate::output::VarSpec;
+use crate::numeric::random::SplitMix64;
+use crate::signal::VarSpec;
 use crate::simulate::CHANNELS;
-use crate::study::design::SplitMix64;
 
 /// Suffix of the noise-free series of a sensor (`<name>_clean`).
 pub const CLEAN_SUFFIX: &str = "_clean";

@@ -15,8 +15,10 @@
 //!   `A` and `B`, every base point gives `A, AB_1..AB_D, BA_1..BA_D, B`
 //!   (`N(2D + 2)` rows), where `AB_k` is `A` with column `k` from `B`.
 //!
-//! The generator is SplitMix64 (Steele, Lea & Flood 2014), written out here so that
-//! the stream is part of this file's definition and never changes with a dependency.
+//! The generator is SplitMix64 ([`SplitMix64`], Steele, Lea & Flood 2014), written out
+//! in this crate so that the stream never changes with a dependency.
+
+pub use crate::numeric::random::SplitMix64;
 
 /// Sobol dimensions available: the first dimension plus 39 rows of Joe & Kuo's table.
 pub const MAX_SOBOL_DIMENSIONS: usize = 1 + DIRECTIONS.len();
@@ -113,42 +115,6 @@ impl Method {
         match self {
             Self::Saltelli => samples.checked_mul(2 * dims as u64 + 2),
             _ => Some(samples),
-        }
-    }
-}
-
-/// SplitMix64: a 64-bit state advanced by a constant, mixed on output.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A generator seeded with `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform draw in `[0, 1)` with 53 random bits.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// A uniform index in `0..n` (`n > 0`), by rejection so every index is equally likely.
-    fn below(&mut self, n: u64) -> u64 {
-        let zone = u64::MAX - u64::MAX % n;
-        loop {
-            let x = self.next_u64();
-            if x < zone {
-                return x % n;
-            }
         }
     }
 }

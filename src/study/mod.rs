@@ -12,6 +12,7 @@
 pub mod config;
 pub mod design;
 mod expand;
+pub mod layout;
 pub mod memory;
 pub mod params;
 mod tree;
@@ -31,6 +32,10 @@ use crate::simulate::{Sampling, CHANNELS};
 use crate::solve::SolverSettings;
 
 pub use expand::Effects;
+pub use layout::{
+    stored_reference_channels, study_layout, study_metric_specs, StudyFingerprint,
+    MODEL_CONVENTIONS, REFERENCE_CHANNELS,
+};
 pub use memory::{Limits, MemoryEstimate};
 
 /// Default largest number of cases a grid may expand to (`max_cases:` overrides).

@@ -1,0 +1,111 @@
+//! The parameter variables of a study's file: every case's values (`[case]`) and the
+//! ideal references' (`[reference]`).
+
+use crate::bearing::fault_label;
+use crate::mechanism::{CaseParams, Location};
+use crate::output::{Param, ParamValues, VarSpec};
+use crate::study::{Case, Study};
+
+/// What `speed_profile` and `reference_speed_profile` hold.
+const PROFILE_DESCRIPTION: &str =
+    "crank speed profile: constant (rpm), ramp, sine (speed_*) or table (knots in the grid file)";
+
+/// The name of a case's speed profile, `constant` for `rpm`.
+fn profile_name(p: &CaseParams) -> String {
+    p.speed
+        .as_ref()
+        .map_or("constant", |s| s.name())
+        .to_string()
+}
+
+/// The `[case]` parameter variables of `cases`: the recorded parameters of the study's
+/// effects, then the labels (location, design row, speed profile, defect race, fault).
+pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
+    let mut parameters: Vec<Param> = study
+        .effects
+        .recorded_parameters()
+        .map(|p| Param {
+            spec: VarSpec::new(p.name, p.dimension.file_units(), p.long_name),
+            values: ParamValues::F64(cases.iter().map(|c| p.get(&c.params)).collect()),
+        })
+        .collect();
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "location",
+            "1",
+            "bearing location: ideal, crank_ground or crank_rod",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| c.params.location.name().to_string())
+                .collect(),
+        ),
+    });
+    if let Some(d) = &study.design {
+        parameters.push(Param {
+            spec: VarSpec::new(
+                "design_row",
+                "1",
+                "row of the sampled design (global attribute design_method) this case runs",
+            ),
+            values: ParamValues::F64(cases.iter().map(|c| (c.id % d.rows) as f64).collect()),
+        });
+    }
+    parameters.push(Param {
+        spec: VarSpec::new("speed_profile", "1", PROFILE_DESCRIPTION),
+        values: ParamValues::Str(cases.iter().map(|c| profile_name(&c.params)).collect()),
+    });
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "defect_race",
+            "1",
+            "race of the first defect: outer, inner or ball (none without defects)",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| {
+                    c.params
+                        .bearing
+                        .defects
+                        .first()
+                        .map_or("none", |d| d.race.name())
+                        .to_string()
+                })
+                .collect(),
+        ),
+    });
+    parameters.push(Param {
+        spec: VarSpec::new(
+            "fault",
+            "1",
+            "fault label: the races with a defect of nonzero depth (outer, inner, ball, \
+             joined by +), or none",
+        ),
+        values: ParamValues::Str(
+            cases
+                .iter()
+                .map(|c| match c.params.location {
+                    Location::Ideal => "none".to_string(),
+                    _ => fault_label(&c.params.bearing.defects),
+                })
+                .collect(),
+        ),
+    });
+    parameters
+}
+
+/// The `[reference]` parameter variables: each ideal run's speed and speed profile.
+pub(super) fn reference_parameters(study: &Study) -> Vec<Param> {
+    vec![
+        Param {
+            spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
+            values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
+        },
+        Param {
+            spec: VarSpec::new("reference_speed_profile", "1", PROFILE_DESCRIPTION),
+            values: ParamValues::Str(study.references.iter().map(profile_name).collect()),
+        },
+    ]
+}
