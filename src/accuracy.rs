@@ -445,7 +445,7 @@ pub fn write_file(
             &|m| reference_of(m).metric_uncertainty[c],
         ));
     }
-    for p in study.effects.recorded_parameters() {
+    for p in study.recorded_parameters() {
         parameters.push(f64_param(
             p.name,
             p.dimension.file_units(),

@@ -5,7 +5,7 @@
 use std::collections::HashSet;
 use std::time::SystemTime;
 
-pub use crate::signal::VarSpec;
+pub use crate::signal::{AttrValue, VarSpec};
 
 /// Name of the case dimension and its coordinate variable (case ids, stored as int32).
 pub const CASE: &str = "case";
@@ -129,51 +129,6 @@ impl Default for Storage {
             float32: false,
             deflate_level: 1,
         }
-    }
-}
-
-/// A root attribute value.
-#[derive(Debug, Clone, PartialEq)]
-pub enum AttrValue {
-    /// A variable-length UTF-8 string (no NUL bytes).
-    Str(String),
-    /// A float64 scalar.
-    F64(f64),
-    /// An int64 scalar.
-    I64(i64),
-}
-
-impl AttrValue {
-    /// The text of a string value.
-    pub fn as_text(&self) -> Option<&str> {
-        match self {
-            Self::Str(s) => Some(s),
-            _ => None,
-        }
-    }
-}
-
-impl From<&str> for AttrValue {
-    fn from(s: &str) -> Self {
-        Self::Str(s.to_owned())
-    }
-}
-
-impl From<String> for AttrValue {
-    fn from(s: String) -> Self {
-        Self::Str(s)
-    }
-}
-
-impl From<f64> for AttrValue {
-    fn from(x: f64) -> Self {
-        Self::F64(x)
-    }
-}
-
-impl From<i64> for AttrValue {
-    fn from(x: i64) -> Self {
-        Self::I64(x)
     }
 }
 

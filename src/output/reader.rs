@@ -16,6 +16,7 @@ use super::layout::{
     REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
 };
 use super::text::{self, Strings};
+use crate::signal::DESCRIPTIVE_ATTRIBUTES;
 use crate::simulate::sample_time;
 
 /// One case read back from a file (owned). Values stored as float32 are widened
@@ -363,12 +364,8 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
             Ok(ds) => ds,
             Err(_) => continue, // not a dataset: not ours
         };
-        if !ds
-            .attr_names()
-            .at(path, &name)?
-            .iter()
-            .any(|a| a == ROLE_ATTR)
-        {
+        let attribute_names = ds.attr_names().at(path, &name)?;
+        if !attribute_names.iter().any(|a| a == ROLE_ATTR) {
             continue; // coordinates, built-ins and variables others added
         }
         let role_name = attributes::read_str(&ds, ROLE_ATTR).at(path, &name)?;
@@ -382,6 +379,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         let spec = VarSpec {
             units: attributes::read_str(&ds, "units").at(path, &name)?,
             long_name: attributes::read_str(&ds, "long_name").at(path, &name)?,
+            attributes: descriptive_attributes(&ds, &attribute_names).at(path, &name)?,
             name: name.clone(),
         };
         let (rows, cols) = match role {
@@ -627,4 +625,17 @@ mod tests {
             assert!(!seconds_from_the_epoch(units), "{units}");
         }
     }
+}
+
+/// The attributes of `ds` among [`DESCRIPTIVE_ATTRIBUTES`] (how the variable was made),
+/// in that order; `names` are all of its attributes.
+fn descriptive_attributes(
+    ds: &Dataset,
+    names: &[String],
+) -> hdf5::Result<Vec<(String, AttrValue)>> {
+    DESCRIPTIVE_ATTRIBUTES
+        .iter()
+        .filter(|d| names.iter().any(|n| n == *d))
+        .map(|&d| Ok((d.to_string(), attributes::read(ds, d)?)))
+        .collect()
 }

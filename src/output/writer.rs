@@ -829,7 +829,8 @@ impl Creator<'_> {
         builder.shape(shape).create(name).at(self.path, name)
     }
 
-    /// Attaches the dimension scales and writes `units`, `long_name` and the role.
+    /// Attaches the dimension scales and writes `units`, `long_name`, the attributes
+    /// saying how the variable was made, and the role.
     fn finish_var(
         &self,
         ds: &Dataset,
@@ -847,6 +848,9 @@ impl Creator<'_> {
         }
         attributes::write_str(ds, "units", &spec.units).at(self.path, name)?;
         attributes::write_str(ds, "long_name", &spec.long_name).at(self.path, name)?;
+        for (attribute, value) in &spec.attributes {
+            attributes::write(ds, attribute, value).at(self.path, name)?;
+        }
         if let Some(role) = role {
             attributes::write_str(ds, ROLE_ATTR, role.as_str()).at(self.path, name)?;
         }

@@ -46,6 +46,16 @@ pub enum BandChoice {
     Auto,
 }
 
+impl BandChoice {
+    /// How the band is chosen, as the file states it: `auto`, or `<low> Hz to <high> Hz`.
+    pub fn describe(&self) -> String {
+        match self {
+            BandChoice::Auto => "auto".to_string(),
+            BandChoice::Fixed(b) => format!("{} Hz to {} Hz", b.low, b.high),
+        }
+    }
+}
+
 /// The grid's `envelope:` settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnvelopeSettings {

@@ -27,7 +27,7 @@ use indicators::{band_energy, Indicators, INDICATOR_NAMES};
 use metrics::{vibration_metrics, Deviation};
 use order::{AngleResampling, OrderSettings};
 use spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
-pub use variable::VarSpec;
+pub use variable::{AttrValue, VarSpec, DESCRIPTIVE_ATTRIBUTES};
 
 /// Channels whose deviation from the ideal mechanism is a metric.
 const DEVIATION_CHANNELS: [(&str, &str); 3] = [
@@ -197,10 +197,12 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
     specs
 }
 
-/// The per-case spectrum variables `envelope:` adds, after the study's spectra: per
-/// channel its envelope spectrum, then its spectral kurtosis.
-pub fn envelope_spectrum_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
+/// The per-case spectrum variables `envelope:` adds, after the study's spectra, for an
+/// analysed window of `n` samples: per channel its envelope spectrum, then its
+/// spectral kurtosis, each saying how it was made (window, normalisation, band, STFT).
+pub fn envelope_spectrum_specs(settings: &EnvelopeSettings, n: usize) -> Vec<VarSpec> {
     let mut specs = Vec::new();
+    let segment = envelope::stft_segment(n);
     for c in &settings.channels {
         let ch = &c.name;
         specs.extend([
@@ -208,16 +210,31 @@ pub fn envelope_spectrum_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
                 format!("{ch}_envelope_spectrum"),
                 units_power(c.units, 2),
                 format!("one-sided amplitude spectrum of the squared envelope of {ch}"),
-            ),
+            )
+            .with("window", HANN)
+            .with("normalisation", spectrum::AMPLITUDE_NORMALISATION)
+            .with("band", settings.band.describe()),
             VarSpec::new(
                 format!("{ch}_spectral_kurtosis"),
                 "1",
                 format!("spectral kurtosis of {ch} over the short-time Fourier transform"),
-            ),
+            )
+            .with("window", HANN)
+            .with("normalisation", SK_NORMALISATION)
+            .with("stft_segment", segment as i64)
+            .with("stft_hop", (segment / 2) as i64),
         ]);
     }
     specs
 }
+
+/// The window of the envelope, spectral-kurtosis and order spectra, whatever
+/// `spectra.window` says (docs/model.md §7.4, §7.5, §7.9).
+const HANN: &str = "hann";
+
+/// How the spectral kurtosis is normalised (docs/model.md §7.5).
+const SK_NORMALISATION: &str =
+    "M sum_m |X_mk|^4 / (sum_m |X_mk|^2)^2 - 2 over the M STFT segments: 0 for Gaussian noise, -1 for a steady tone";
 
 /// The per-case order spectra `[case, order]` of a study with `orders`
 /// (docs/model.md §7.9): `<channel>_order_spectrum` per spectrum channel (with
@@ -231,29 +248,45 @@ pub fn order_spectrum_specs(
     let mut specs = Vec::new();
     if orders.spectra {
         specs.extend(spectrum_channels.iter().map(|c| {
-            VarSpec::new(
-                format!("{}_order_spectrum", c.name),
-                c.units,
-                format!(
-                    "one-sided amplitude spectrum over crank-angle orders of {}",
-                    c.long_name
+            order_spec(
+                orders,
+                VarSpec::new(
+                    format!("{}_order_spectrum", c.name),
+                    c.units,
+                    format!(
+                        "one-sided amplitude spectrum over crank-angle orders of {}",
+                        c.long_name
+                    ),
                 ),
             )
         }));
     }
     if let (true, Some(e)) = (orders.envelope, envelope) {
         specs.extend(e.channels.iter().map(|c| {
-            VarSpec::new(
-                format!("{}_envelope_order_spectrum", c.name),
-                units_power(c.units, 2),
-                format!(
-                    "one-sided amplitude spectrum over crank-angle orders of the squared envelope of {}",
-                    c.name
-                ),
+            order_spec(
+                orders,
+                VarSpec::new(
+                    format!("{}_envelope_order_spectrum", c.name),
+                    units_power(c.units, 2),
+                    format!(
+                        "one-sided amplitude spectrum over crank-angle orders of the squared envelope of {}",
+                        c.name
+                    ),
+                )
+                .with("band", e.band.describe()),
             )
         }));
     }
     specs
+}
+
+/// An order spectrum's spec with how it was made: Hann window, amplitude
+/// normalisation, and the `R` revolutions in `M` angle samples it resamples.
+fn order_spec(orders: &OrderSettings, spec: VarSpec) -> VarSpec {
+    spec.with("window", HANN)
+        .with("normalisation", spectrum::AMPLITUDE_NORMALISATION)
+        .with("order_revolutions", orders.revolutions as i64)
+        .with("order_samples", orders.samples as i64)
 }
 
 /// The order analysis of a study: its settings and the plan a worker reuses.

@@ -22,6 +22,9 @@ use std::sync::Arc;
 use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 
+/// How every amplitude spectrum of the file is normalised (docs/model.md §7.1).
+pub const AMPLITUDE_NORMALISATION: &str =
+    "one-sided amplitude: a sinusoid of amplitude A on a bin reads A; mean not removed";
 /// The window applied to the samples before the FFT.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Window {

@@ -230,6 +230,25 @@ impl Study {
         let design = self.design.iter().flat_map(|d| &d.parameters);
         self.axes.iter().chain(design).map(String::as_str).collect()
     }
+
+    /// The parameters the file records for every case: those of the study's effects
+    /// ([`Effects::recorded_parameters`]), the `speed_*` fields of a profile only when
+    /// some case runs that profile.
+    pub fn recorded_parameters(&self) -> impl Iterator<Item = &'static params::ParamDef> + '_ {
+        let runs = |profile: &str| {
+            self.cases
+                .iter()
+                .any(|c| c.params.speed.as_ref().is_some_and(|s| s.name() == profile))
+        };
+        let (ramp, sine) = (runs("ramp"), runs("sine"));
+        self.effects.recorded_parameters().filter(move |p| {
+            match params::speed_profile_field(p.name) {
+                Some("ramp") => ramp,
+                Some("sine") => sine,
+                _ => true,
+            }
+        })
+    }
 }
 
 impl Study {

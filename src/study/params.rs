@@ -90,6 +90,16 @@ fn sine(c: &CaseParams, f: fn(f64, f64, f64) -> f64) -> f64 {
     }
 }
 
+/// The speed profile (`ramp`, `sine`) whose field the parameter `name` is, if it is
+/// one of the `speed_*` parameters.
+pub fn speed_profile_field(name: &str) -> Option<&'static str> {
+    match name {
+        "speed_from" | "speed_to" | "speed_over" => Some("ramp"),
+        "speed_mean" | "speed_amplitude" | "speed_frequency" => Some("sine"),
+        _ => None,
+    }
+}
+
 /// The ramp profile's fields, when the case has one (the study refuses a
 /// `speed_from/to/over` axis for any other speed).
 fn ramp_mut(c: &mut CaseParams) -> Option<(&mut f64, &mut f64, &mut f64)> {

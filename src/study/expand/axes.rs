@@ -10,10 +10,9 @@ pub(super) type Axis<'a> = (&'a String, &'a S<Vec<S<Scalar>>>, String);
 /// profile, a `speed_*` axis of another profile than the case's.
 pub(super) fn check_speed(case: &CaseParams, param: &str) -> Result<(), String> {
     let has = case.speed.as_ref().map(SpeedProfile::name);
-    let needs = match param {
-        "speed_from" | "speed_to" | "speed_over" => "ramp",
-        "speed_mean" | "speed_amplitude" | "speed_frequency" => "sine",
-        "rpm" => match has {
+    let needs = match (crate::study::params::speed_profile_field(param), param) {
+        (Some(profile), _) => profile,
+        (None, "rpm") => match has {
             Some(p) => {
                 return Err(format!(
                     "rpm and speed both given: the case's speed is a {p} profile (`speed:`); \

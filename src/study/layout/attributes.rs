@@ -2,7 +2,8 @@
 //! what each optional section (replicates, chaos check, design, envelope, orders) adds.
 
 use crate::output::{provenance, AttrValue};
-use crate::signal::envelope::{kurtogram_depth, stft_segment, BandChoice, EnvelopeSettings};
+use crate::signal::envelope::{kurtogram_depth, stft_segment, EnvelopeSettings};
+use crate::signal::spectrum::AMPLITUDE_NORMALISATION;
 use crate::study::{Shard, Study};
 
 use super::{StudyFingerprint, MODEL_CONVENTIONS};
@@ -55,8 +56,7 @@ pub(super) fn root_attributes(
         ("spectrum_window".to_string(), study.window.clone().into()),
         (
             "spectrum_normalisation".to_string(),
-            "one-sided amplitude: a sinusoid of amplitude A on a bin reads A; mean not removed"
-                .into(),
+            AMPLITUDE_NORMALISATION.into(),
         ),
         (
             "effects".to_string(),
@@ -112,10 +112,7 @@ pub(super) fn root_attributes(
 /// The root attributes of a study with `envelope:`: how its band is chosen and the
 /// sizes of the kurtogram and the STFT for `n` analysed samples (docs/model.md §7.4–§7.6).
 fn envelope_attributes(envelope: &EnvelopeSettings, n: usize) -> Vec<(String, AttrValue)> {
-    let band = match envelope.band {
-        BandChoice::Auto => "auto".to_string(),
-        BandChoice::Fixed(b) => format!("{} Hz to {} Hz", b.low, b.high),
-    };
+    let band = envelope.band.describe();
     let segment = stft_segment(n);
     vec![
         ("envelope_band".to_string(), band.into()),

@@ -15,7 +15,7 @@ use crate::numeric::hash::fnv1a;
 use crate::output::{Layout, Storage, VarSpec};
 use crate::signal::replicates::replicate_metric_specs;
 use crate::signal::revolutions::revolution_metric_specs;
-use crate::signal::spectrum::frequencies;
+use crate::signal::spectrum::{frequencies, AMPLITUDE_NORMALISATION};
 use crate::signal::{envelope_spectrum_specs, order_spectrum_specs};
 use crate::study::{Shard, Study};
 
@@ -75,8 +75,15 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
                     ch.units,
                     format!("one-sided amplitude spectrum of {}", ch.long_name),
                 )
+                .with("window", study.window.as_str())
+                .with("normalisation", AMPLITUDE_NORMALISATION)
             })
-            .chain(study.envelope.iter().flat_map(envelope_spectrum_specs))
+            .chain(
+                study
+                    .envelope
+                    .iter()
+                    .flat_map(|e| envelope_spectrum_specs(e, n_window)),
+            )
             .collect(),
         metrics: study_metric_specs(study),
         replicates: study

@@ -22,7 +22,6 @@ fn profile_name(p: &CaseParams) -> String {
 /// effects, then the labels (location, design row, speed profile, defect race, fault).
 pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
     let mut parameters: Vec<Param> = study
-        .effects
         .recorded_parameters()
         .map(|p| Param {
             spec: VarSpec::new(p.name, p.dimension.file_units(), p.long_name),
