@@ -6,6 +6,7 @@ mod accuracy;
 mod bearing_limits;
 mod cage_angle;
 mod cli;
+mod cli_json;
 mod constraints;
 mod contact_laws;
 mod convergence;

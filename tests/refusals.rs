@@ -875,7 +875,7 @@ fn inputs_that_are_no_hdf5_file_say_what_they_are() {
         ),
     ] {
         for args in [&["inspect", path][..], &["merge", "out.h5", path]] {
-            let err = refused(&studyrun(dir.path(), args), 1, &[what]);
+            let err = refused(&studyrun(dir.path(), args), 2, &[what]);
             assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
         }
     }

@@ -83,7 +83,7 @@ mod writer;
 pub use dimension_scales::ScaleError;
 pub use encode::ChunkEncoder;
 pub use error::{OutputError, StudyFileError};
-pub use inspect::inspect;
+pub use inspect::{inspect, Summary};
 pub use layout::{
     command_line, history_line, provenance, shell_word, AttrValue, Layout, Param, ParamValues,
     Status, Storage, VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE,

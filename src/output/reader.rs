@@ -597,6 +597,19 @@ fn read_storage(ds: &Dataset) -> hdf5::Result<Storage> {
     })
 }
 
+/// The attributes of `ds` among [`DESCRIPTIVE_ATTRIBUTES`] (how the variable was made),
+/// in that order; `names` are all of its attributes.
+fn descriptive_attributes(
+    ds: &Dataset,
+    names: &[String],
+) -> hdf5::Result<Vec<(String, AttrValue)>> {
+    DESCRIPTIVE_ATTRIBUTES
+        .iter()
+        .filter(|d| names.iter().any(|n| n == *d))
+        .map(|&d| Ok((d.to_string(), attributes::read(ds, d)?)))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::seconds_from_the_epoch;
@@ -625,17 +638,4 @@ mod tests {
             assert!(!seconds_from_the_epoch(units), "{units}");
         }
     }
-}
-
-/// The attributes of `ds` among [`DESCRIPTIVE_ATTRIBUTES`] (how the variable was made),
-/// in that order; `names` are all of its attributes.
-fn descriptive_attributes(
-    ds: &Dataset,
-    names: &[String],
-) -> hdf5::Result<Vec<(String, AttrValue)>> {
-    DESCRIPTIVE_ATTRIBUTES
-        .iter()
-        .filter(|d| names.iter().any(|n| n == *d))
-        .map(|&d| Ok((d.to_string(), attributes::read(ds, d)?)))
-        .collect()
 }
