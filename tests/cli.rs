@@ -911,3 +911,108 @@ fn empty_shards_merge_and_unfinished_inputs_are_refused() {
     );
     assert!(!d.join("x.h5").exists());
 }
+
+/// Writes `ids` into the `case` variable of the study file at `path`.
+fn set_case_ids(path: &Path, ids: &[i32]) {
+    let file = hdf5::File::open_rw(path).unwrap();
+    file.dataset("case").unwrap().write(ids).unwrap();
+}
+
+/// Case ids are checked: merge takes exactly the ids 0..N-1, each from the shard that
+/// holds it; `inspect` and `--resume` refuse an id beyond the study's cases. A shard
+/// whose name merely contains `.partial` merges.
+#[test]
+fn case_ids_out_of_place_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tiny = "name: tiny\nduration: 0.02\nsample_rate: 10000\ngrid:\n  location: [crank_ground, crank_rod]\n  ball_count: [8, 9]\n  rpm: [600]\n";
+    write(d, "tiny.yaml", tiny);
+    for k in 1..=2 {
+        let out = format!("p{k}.partial.h5");
+        let r = studyrun(
+            d,
+            &["tiny.yaml", "--shard", &format!("{k}/2"), "-o", &out, "-q"],
+        );
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let merged = studyrun(d, &["merge", "all.h5", "p1.partial.h5", "p2.partial.h5"]);
+    assert!(
+        merged.status.success(),
+        "{}",
+        String::from_utf8_lossy(&merged.stderr)
+    );
+    // Shard 2/2 holds ids 1 and 3: its last edited to 1001, then to 2 (shard 1's).
+    std::fs::copy(d.join("p2.partial.h5"), d.join("p2.h5")).unwrap();
+    for (ids, needle) in [
+        (
+            [1, 1001],
+            "case id 1001 is out of range: the study has 4 cases",
+        ),
+        ([1, 2], "case id 2 does not belong to shard 2/2"),
+    ] {
+        set_case_ids(&d.join("p2.h5"), &ids);
+        for args in [
+            &["merge", "x.h5", "p1.partial.h5", "p2.h5"][..],
+            &["inspect", "p2.h5"],
+        ] {
+            let out = studyrun(d, args);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+            assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        }
+        assert!(!d.join("x.h5").exists() && !d.join("x.h5.partial").exists());
+    }
+    std::fs::copy(d.join("all.h5"), d.join("big.h5")).unwrap();
+    set_case_ids(&d.join("big.h5"), &[0, 1, 2, i32::MAX]);
+    for args in [
+        &["inspect", "big.h5"][..],
+        &["tiny.yaml", "-o", "big.h5", "-q", "--resume"],
+    ] {
+        let out = studyrun(d, args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("case id 2147483647 is out of range"),
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
+/// Files beside the output that no journal says a run wrote are the user's: a plain
+/// run, `--resume` and `--force` refuse to start rather than remove them.
+#[test]
+fn files_in_the_way_of_a_run_are_left_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "race.yaml", RACE);
+    for side in [
+        "out.h5.partial",
+        "out.h5.partial.resumed",
+        "out.h5.journal.new",
+    ] {
+        write(d, side, "my own notes\n");
+        for extra in [None, Some("--resume"), Some("--force")] {
+            let mut args = vec!["race.yaml", "-o", "out.h5", "-q"];
+            args.extend(extra);
+            let out = studyrun(d, &args);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{side} {extra:?}: {stderr}");
+            assert!(stderr.contains("is in the way"), "{stderr}");
+            assert_eq!(
+                std::fs::read_to_string(d.join(side)).unwrap(),
+                "my own notes\n"
+            );
+        }
+        std::fs::remove_file(d.join(side)).unwrap();
+    }
+    write(d, "m.h5.partial", "mine\n");
+    assert!(studyrun(d, &["race.yaml", "-o", "one.h5", "-q"])
+        .status
+        .success());
+    let merge = studyrun(d, &["merge", "m.h5", "one.h5"]);
+    assert_eq!(merge.status.code(), Some(1));
+    assert_eq!(
+        std::fs::read_to_string(d.join("m.h5.partial")).unwrap(),
+        "mine\n"
+    );
+}

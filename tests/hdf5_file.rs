@@ -328,15 +328,15 @@ fn float32_round_trips_to_float32_precision() {
     let ds = file.dataset(CHANNELS[0].name).unwrap();
     assert_eq!(ds.dtype().unwrap().size(), 4);
     assert_eq!(ds.chunk(), Some(vec![1, N_TIME]));
-    assert!(
-        ds.filters().is_empty(),
-        "level 0 must mean no filter: {:?}",
-        ds.filters()
+    assert_eq!(
+        ds.filters(),
+        vec![Filter::Fletcher32],
+        "level 0 must mean the checksum alone"
     );
 }
 
 #[test]
-fn series_are_chunked_by_case_with_shuffle_and_deflate() {
+fn series_are_chunked_by_case_with_shuffle_deflate_and_fletcher32() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("chunks.h5");
     let level = 6;
@@ -360,13 +360,16 @@ fn series_are_chunked_by_case_with_shuffle_and_deflate() {
         assert_eq!(ds.chunk(), Some(vec![1, cols]), "{}", spec.name);
         assert_eq!(
             ds.filters(),
-            vec![Filter::Shuffle, Filter::Deflate(level)],
+            vec![Filter::Shuffle, Filter::Deflate(level), Filter::Fletcher32],
             "{}",
             spec.name
         );
     }
+    // 1-D variables: whole (they are small), checksummed, not compressed.
     for name in ["status", "ball_count", "slider_acceleration_rms_deviation"] {
-        assert!(!file.dataset(name).unwrap().is_chunked(), "{name}");
+        let ds = file.dataset(name).unwrap();
+        assert_eq!(ds.chunk(), Some(vec![CASE_IDS.len()]), "{name}");
+        assert_eq!(ds.filters(), vec![Filter::Fletcher32], "{name}");
     }
     assert_eq!(
         StudyReader::open(&path)
@@ -443,7 +446,7 @@ fn chunks_lie_after_the_file_length_before_their_write() {
                 c
             })
             .collect();
-        assert!(row % 2 != 0 || chunks[1].len() < 100, "{}", chunks[1].len());
+        assert!(row % 2 != 0 || chunks[1].len() < 120, "{}", chunks[1].len());
         let refs: Vec<&[u8]> = chunks.iter().map(Vec::as_slice).collect();
         let (series, spectra) = refs.split_at(case.series.len());
         let record = EncodedRecord {
@@ -670,7 +673,8 @@ fn write_encoded_file(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
     writer.finish().unwrap();
 }
 
-/// The same rows written by HDF5's own filter pipeline (shuffle + deflate, or none).
+/// The same rows written by HDF5's own filter pipeline (shuffle + deflate, or none;
+/// then Fletcher-32).
 fn write_through_hdf5_filters(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
     let file = hdf5::File::create(path).unwrap();
     let n = rows[0].len();
@@ -682,6 +686,7 @@ fn write_through_hdf5_filters(path: &Path, storage: Storage, rows: &[Vec<f64>]) 
         builder = builder.shuffle().deflate(storage.deflate_level);
     }
     builder
+        .fletcher32()
         .create("x")
         .unwrap()
         .write_raw(&rows.concat())
@@ -706,7 +711,7 @@ fn stored_values(storage: Storage, rows: &[Vec<f64>]) -> Vec<Vec<u64>> {
 
 /// Direct chunk writes read back bit for bit, through the Rust reader and through
 /// HDF5's own inflate and unshuffle, and equal what HDF5's filter pipeline stores;
-/// the dataset keeps the standard shuffle + deflate filters. Leaves
+/// the dataset keeps the standard shuffle + deflate filters and Fletcher-32. Leaves
 /// `target/test-files/direct_chunks/` (files and the expected values as raw
 /// little-endian f64) for `tests/python/test_direct_chunks.py`.
 #[test]
@@ -739,9 +744,9 @@ fn direct_chunks_read_like_hdf5_filtered_chunks() {
         let file = hdf5::File::open(&path).unwrap();
         let ds = file.dataset("x").unwrap();
         let expected_filters = if level > 0 {
-            vec![Filter::Shuffle, Filter::Deflate(level)]
+            vec![Filter::Shuffle, Filter::Deflate(level), Filter::Fletcher32]
         } else {
-            vec![]
+            vec![Filter::Fletcher32]
         };
         assert_eq!(ds.filters(), expected_filters, "{name}");
         let all = bits(&ds.read_raw::<f64>().unwrap());
@@ -752,6 +757,19 @@ fn direct_chunks_read_like_hdf5_filtered_chunks() {
             let theirs = hdf5::File::open(&reference).unwrap().dataset("x").unwrap();
             let theirs = bits(&theirs.read_raw::<f64>().unwrap());
             assert_eq!(all, theirs, "{name}: same values as HDF5's own filters");
+            if level == 0 {
+                // No deflate: HDF5's chunks are ours byte for byte, Fletcher-32 included.
+                let bytes = std::fs::read(&reference).unwrap();
+                let mut encoder = ChunkEncoder::new(storage);
+                for row in &rows {
+                    let mut chunk = Vec::new();
+                    encoder.encode(row, &mut chunk);
+                    assert!(
+                        bytes.windows(chunk.len()).any(|w| w == chunk),
+                        "{name}: a chunk HDF5 did not store"
+                    );
+                }
+            }
             std::fs::remove_file(&reference).unwrap();
         }
         let raw: Vec<u8> = want.concat().iter().flat_map(|b| b.to_le_bytes()).collect();

@@ -232,9 +232,9 @@ fn references_of_a_design_and_absurd_speeds_count_against_the_limit() {
     );
     refused(&out, 2, &["needs at least", "case table 5000 cases"]);
     assert!(took < FAST, "took {took:?}");
-    // A crank speed with more revolutions than memory holds per-revolution values
-    // for, up to one that overflows every integer count.
-    for rpm in ["1e12", "1e15", "1e300", "1.7e308"] {
+    // A crank speed faster than the sampling resolves, whose per-revolution values
+    // would outnumber the samples, up to one that overflows every integer count.
+    for rpm in ["1e6", "1e12", "1e15", "1e300", "1.7e308"] {
         write(
             dir.path(),
             "fast.yaml",
@@ -251,13 +251,28 @@ fn references_of_a_design_and_absurd_speeds_count_against_the_limit() {
                 2,
                 &[
                     "`grid`",
-                    "revolutions per case",
-                    "of memory, more than the limit",
+                    "fewer than 2 samples per revolution",
+                    "at most 30 × sample_rate rpm (300000 rpm)",
                 ],
             );
             assert!(took < FAST, "{rpm} {args:?} took {took:?}");
         }
     }
+    // The speed typo of a grid axis, which the memory estimate let through.
+    write(
+        dir.path(),
+        "rev.yaml",
+        "name: rev\nduration: 0.05\nsample_rate: 5000\ntransient: \"0.01 s\"\n\
+         grid: {location: [crank_ground], rpm: [1e11]}\n",
+    );
+    let (out, took) = timed(dir.path(), &["rev.yaml", "--memory-limit", "4GiB"]);
+    refused(
+        &out,
+        2,
+        &["rev.yaml:3:", "fewer than 2 samples per revolution"],
+    );
+    assert!(took < FAST, "took {took:?}");
+    assert!(!dir.path().join("rev.h5").exists());
 }
 
 #[test]
@@ -546,6 +561,14 @@ fn study_names_must_be_plain_file_names() {
         ("\".hidden\"", "starts with a dot"),
         ("\"\"", "is empty"),
         ("\"tab\\there\"", "contains a control character"),
+        (
+            "\"right\\u202Eto left\"",
+            "bidirectional or line-separator mark",
+        ),
+        (
+            "\"line\\u2028separator\"",
+            "bidirectional or line-separator mark",
+        ),
     ] {
         let text =
             format!("name: {name}\nduration: 0.05\nsample_rate: 10000\ngrid:\n  rpm: [300]\n");
@@ -880,6 +903,30 @@ fn inputs_that_are_no_hdf5_file_say_what_they_are() {
         }
     }
     assert!(!dir.path().join("out.h5").exists());
+}
+
+/// A FIFO given as an input is refused (grid files: read as what its writer sends, here
+/// nothing), never waited for, by every command.
+#[test]
+fn a_fifo_input_is_refused_without_waiting_for_a_writer() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fifo = d.join("pipe");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo with a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    for (args, code) in [
+        (&["inspect", "pipe"][..], 1),
+        (&["inspect", "--verify", "pipe"][..], 1),
+        (&["merge", "out.h5", "pipe"][..], 1),
+        (&["validate", "pipe"][..], 2),
+        (&["pipe", "-o", "out.h5", "-q"][..], 2),
+    ] {
+        let (out, took) = timed(d, args);
+        assert!(took < FAST, "{args:?} took {took:?}");
+        refused(&out, code, &["pipe"]);
+    }
+    assert!(!d.join("out.h5").exists());
 }
 
 #[test]

@@ -275,7 +275,15 @@ fn bad_sensors_are_refused_by_field() {
         ),
         (
             "  - {name: a, channel: crank_moment, natural_frequency: 1000, damping_ratio: 0.1, noise: {snr_db: .inf}}\n",
-            "`sensors[0].noise.snr_db`: inf; expected a finite signal-to-noise ratio",
+            "`sensors[0].noise.snr_db`: inf is not allowed: a signal-to-noise ratio from -100 to 300 dB",
+        ),
+        (
+            "  - {name: a, channel: crank_moment, natural_frequency: 1000, damping_ratio: 0.1, noise: {snr_db: -4000}}\n",
+            "`sensors[0].noise.snr_db`: -4000 is not allowed",
+        ),
+        (
+            "  - {name: a, channel: crank_moment, natural_frequency: 1000, damping_ratio: 0.1, noise: {snr_db: 301}}\n",
+            "`sensors[0].noise.snr_db`: 301 is not allowed",
         ),
         (
             "  - {name: a, channel: crank_moment, natural_frequency: 1000, damping_ratio: 0.1, noise: {snr_db: .nan, seed: 3}}\n",

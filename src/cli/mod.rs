@@ -143,6 +143,10 @@ enum Command {
         /// Print the summary as one JSON object (schema: docs/cli.md).
         #[arg(long)]
         json: bool,
+        /// Also read every value and check every checksum (exit 1 naming what is
+        /// damaged); the text summary ends with the verdict.
+        #[arg(long)]
+        verify: bool,
     },
     /// Measure what accuracy costs: every integrator over a ladder of settings against
     /// a tight reference, for each case of the grid; prints a table and the cheapest
@@ -253,7 +257,7 @@ pub fn main() -> ExitCode {
             memory_limit,
             json,
         }) => validate_command(&grid, limits(jobs, memory_limit), json),
-        Some(Command::Inspect { file, json }) => inspect_command(&file, json),
+        Some(Command::Inspect { file, json, verify }) => inspect_command(&file, json, verify),
         Some(Command::Completions { shell }) => {
             clap_complete::generate(
                 shell,
@@ -331,12 +335,16 @@ fn exit_code(e: &anyhow::Error) -> u8 {
 }
 
 /// `studyrun inspect FILE [--json]`.
-fn inspect_command(file: &Path, json: bool) -> Result<u8> {
+fn inspect_command(file: &Path, json: bool, verify: bool) -> Result<u8> {
     let summary = output::Summary::read(file)?;
+    let verdict = verify.then(|| output::verify(file)).transpose()?;
     if json {
         out!("{}", serde_json::to_string_pretty(&summary)?)?;
     } else {
         out!("{}", summary.text().trim_end_matches('\n'))?;
+        if let Some(line) = verdict {
+            out!("{line}")?;
+        }
     }
     Ok(EXIT_OK)
 }

@@ -4,11 +4,13 @@
 //! [`StudyWriter::write_encoded`](super::StudyWriter::write_encoded)).
 //!
 //! With a deflate level of 0 a chunk is the row's elements as they are (native byte
-//! order, float64 or float32), the dataset having no filter. Otherwise it is what
-//! HDF5's shuffle filter followed by its deflate filter store: the elements'
-//! bytes regrouped into byte planes (all first bytes, then all second bytes, …), as
-//! one zlib stream (RFC 1950 header, deflate blocks, Adler-32 of the shuffled bytes).
-//! Every zlib reader (h5py, netCDF-C, xarray) inflates it like a chunk HDF5 deflated.
+//! order, float64 or float32). Otherwise it is what HDF5's shuffle filter followed by
+//! its deflate filter store: the elements' bytes regrouped into byte planes (all first
+//! bytes, then all second bytes, …), as one zlib stream (RFC 1950 header, deflate
+//! blocks, Adler-32 of the shuffled bytes). Every zlib reader (h5py, netCDF-C, xarray)
+//! inflates it like a chunk HDF5 deflated. Either way the chunk ends with what HDF5's
+//! Fletcher-32 filter, the last of the pipeline ([`filters`]), appends: the checksum
+//! of the bytes before it, little-endian, which every HDF5 reader checks.
 //!
 //! The deflate blocks are chosen plane by plane: a byte plane whose sampled byte
 //! entropy is above [`STORE_ABOVE_BITS`] (the noisy low-order mantissa bytes of
@@ -88,11 +90,14 @@ impl ChunkEncoder {
     /// Appends to `out` the stored bytes of one chunk holding `values` (float64, or
     /// rounded to nearest float32 when the storage says so).
     pub fn encode(&mut self, values: &[f64], out: &mut Vec<u8>) {
+        let start = out.len();
         if self.storage.float32 {
             self.encode_elements(values, |v| (v as f32).to_ne_bytes(), out);
         } else {
             self.encode_elements(values, f64::to_ne_bytes, out);
         }
+        let sum = fletcher32(&out[start..]);
+        out.extend_from_slice(&sum.to_le_bytes());
     }
 
     fn encode_elements<const E: usize>(
@@ -135,6 +140,49 @@ impl ChunkEncoder {
         out.extend_from_slice(&[1, 0, 0, 0xff, 0xff]);
         out.extend_from_slice(&zlib_rs::adler32::adler32(1, &self.shuffled).to_be_bytes());
     }
+}
+
+/// The filter pipeline of the datasets whose chunks a [`ChunkEncoder`] for `storage`
+/// makes: shuffle and deflate (with a deflate level above 0), then Fletcher-32.
+pub(super) fn filters(storage: Storage) -> Vec<hdf5::filters::Filter> {
+    use hdf5::filters::Filter;
+    let level = storage.deflate_level;
+    let compress = (level > 0).then(|| [Filter::shuffle(), Filter::deflate(level)]);
+    compress
+        .into_iter()
+        .flatten()
+        .chain([Filter::fletcher32()])
+        .collect()
+}
+
+/// HDF5's Fletcher-32 checksum of `data` (`H5_checksum_fletcher32`): sums of its
+/// big-endian 16-bit words (a last odd byte as the high byte of a word), folded to
+/// 16 bits every 360 words; the Fletcher-32 filter appends it little-endian.
+pub(super) fn fletcher32(data: &[u8]) -> u32 {
+    let (mut sum1, mut sum2) = (0u32, 0u32);
+    let fold = |s: u32| (s & 0xffff) + (s >> 16);
+    let words = data.chunks_exact(2);
+    let odd = words.remainder().first().copied();
+    let words: Vec<u32> = words
+        .map(|w| (u32::from(w[0]) << 8) | u32::from(w[1]))
+        .collect();
+    for block in words.chunks(360) {
+        for &w in block {
+            sum1 += w;
+            sum2 += sum1;
+        }
+        sum1 = fold(sum1);
+        sum2 = fold(sum2);
+    }
+    if let Some(b) = odd {
+        sum1 += u32::from(b) << 8;
+        sum2 += sum1;
+        sum1 = fold(sum1);
+        sum2 = fold(sum2);
+    }
+    sum1 = fold(sum1);
+    sum2 = fold(sum2);
+    (sum2 << 16) | sum1
 }
 
 /// Whether deflate is worth running on a byte plane: its byte entropy, estimated on
@@ -224,7 +272,9 @@ mod tests {
     use zlib_rs::InflateConfig;
 
     /// Inflates a zlib stream of `len` bytes (checking its Adler-32) and unshuffles it.
-    fn decode(stream: &[u8], storage: Storage, n: usize) -> Vec<f64> {
+    fn decode(chunk: &[u8], storage: Storage, n: usize) -> Vec<f64> {
+        let (stream, sum) = chunk.split_at(chunk.len() - 4);
+        assert_eq!(sum, fletcher32(stream).to_le_bytes(), "Fletcher-32");
         let e = if storage.float32 { 4 } else { 8 };
         let bytes = if storage.deflate_level == 0 {
             stream.to_vec()

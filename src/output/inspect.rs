@@ -482,6 +482,26 @@ fn axis_values(l: &Layout, axes: &[String], row: usize) -> BTreeMap<String, Stri
         .collect()
 }
 
+/// Reads every value of the study file at `path` and checks every checksum
+/// ([`StudyReader::verify`]); an error names what is damaged. Returns the line that
+/// says so, naming the variables without a checksum if there are any.
+pub fn verify(path: &Path) -> Result<String> {
+    let r = StudyReader::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let unchecked = r
+        .verify()
+        .with_context(|| format!("{} is damaged", path.display()))?;
+    let n = r.layout().n_cases();
+    Ok(if unchecked.is_empty() {
+        format!("verified: every value of the {n} cases read, every checksum matches")
+    } else {
+        format!(
+            "verified: every value of the {n} cases read, every checksum matches; these \
+             variables carry none (a tool rewrote the file?): {}",
+            unchecked.join(", ")
+        )
+    })
+}
+
 /// A note when `path` belongs to an interrupted run: it is a run's partial file (its
 /// finished cases are in the journal, not yet marked here), or a result file beside
 /// the journal of a run that will replace it.

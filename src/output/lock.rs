@@ -1,7 +1,7 @@
 //! One writer per output: every command that creates, replaces or removes the files
 //! of a result file `OUT.h5` first holds an exclusive lock on `OUT.h5.lock`.
 //!
-//! The lock is `flock(2)`, which the kernel releases when the process dies, however
+//! The lock is the standard library's [`File::try_lock`] (`flock(2)` on Linux), which the kernel releases when the process dies, however
 //! it dies, so a killed run never leaves a stale lock. The holder writes its pid
 //! into the lock file for the message a second process prints. The lock file is
 //! removed when the lock is released; a process that locked a file another process
@@ -11,7 +11,6 @@
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::os::unix::fs::MetadataExt;
-use std::os::unix::io::AsRawFd;
 use std::path::{Path, PathBuf};
 
 use super::with_suffix;
@@ -37,19 +36,20 @@ impl OutputLock {
                 .truncate(false)
                 .open(&path)
                 .map_err(OutputError::io("create the lock file", &path))?;
-            // SAFETY: `flock` on a descriptor this function owns.
-            if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-                let err = std::io::Error::last_os_error();
-                if err.raw_os_error() != Some(libc::EWOULDBLOCK) {
-                    return Err(OutputError::io("lock", &path)(err));
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let mut text = String::new();
+                    let _ = file.read_to_string(&mut text);
+                    return Err(OutputError::Locked {
+                        output: output.to_path_buf(),
+                        lock: path,
+                        pid: text.trim().parse().unwrap_or(0),
+                    });
                 }
-                let mut text = String::new();
-                let _ = file.read_to_string(&mut text);
-                return Err(OutputError::Locked {
-                    output: output.to_path_buf(),
-                    lock: path,
-                    pid: text.trim().parse().unwrap_or(0),
-                });
+                Err(std::fs::TryLockError::Error(err)) => {
+                    return Err(OutputError::io("lock", &path)(err))
+                }
             }
             // The holder before us may have removed the file after we opened it.
             let same = match (file.metadata(), std::fs::metadata(&path)) {
@@ -58,6 +58,14 @@ impl OutputLock {
             };
             if !same {
                 continue;
+            }
+            // A hard link would have the pid written into the file it shares.
+            if file.metadata().is_ok_and(|m| m.nlink() > 1) {
+                return Err(OutputError::Refused(format!(
+                    "{} (the lock file) is a hard link to another file; studyrun writes \
+                     through no links: remove it",
+                    path.display()
+                )));
             }
             let pid = format!("{}\n", std::process::id());
             file.set_len(0)
@@ -74,8 +82,7 @@ impl Drop for OutputLock {
         // Removed while still locked, so no other process can lock this file after
         // it is gone from the directory without noticing.
         let _ = std::fs::remove_file(&self.path);
-        // SAFETY: unlocking the descriptor this value owns.
-        unsafe { libc::flock(self.file.as_raw_fd(), libc::LOCK_UN) };
+        let _ = self.file.unlock();
     }
 }
 
@@ -96,5 +103,24 @@ mod tests {
         assert!(!with_suffix(&out, ".lock").exists());
         let again = OutputLock::acquire(&out).unwrap();
         drop(again);
+    }
+
+    #[test]
+    fn a_hard_linked_lock_file_is_refused_and_its_file_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.h5");
+        let mine = dir.path().join("mine.txt");
+        std::fs::write(&mine, "my notes\n").unwrap();
+        std::fs::hard_link(&mine, with_suffix(&out, ".lock")).unwrap();
+        let e = OutputLock::acquire(&out).unwrap_err();
+        assert!(e.to_string().contains("hard link"), "{e}");
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), "my notes\n");
+        let e = crate::output::overwrite::check_side_path(
+            &with_suffix(&out, ".lock"),
+            "the lock file",
+            &[],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("hard link"), "{e}");
     }
 }

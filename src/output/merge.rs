@@ -100,12 +100,15 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        ensure(!name.contains(".partial"), || {
-            format!(
-                "{} is the partial file of an unfinished run; finish it with --resume first",
-                p.display()
-            )
-        })?;
+        ensure(
+            super::DataFile::output_of(Path::new(&name)).is_none(),
+            || {
+                format!(
+                    "{} is the partial file of an unfinished run; finish it with --resume first",
+                    p.display()
+                )
+            },
+        )?;
         let (journal, _) = side_paths(p);
         ensure(!journal.exists(), || {
             format!(
@@ -208,6 +211,15 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             order.len()
         )
     })?;
+    // Sorted, distinct and as many as the study's cases: ids 0..N-1 unless one is off.
+    if let Some((row, &(id, s, _))) = order.iter().enumerate().find(|&(row, o)| o.0 != row as u64) {
+        return Err(OutputError::Refused(format!(
+            "case {row} of the study is in no shard ({} holds case id {id} instead; the \
+             study's ids are 0 to {})",
+            shards[s].display(),
+            expected.saturating_sub(1)
+        )));
+    }
 
     // Each shard's variables in the first shard's order.
     struct Order {
@@ -236,9 +248,10 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             }
         })
         .collect();
-    // The cases are read below: check first that reading them cannot crash.
+    // Every value of every shard read and its checksums checked before anything is
+    // copied (this also checks that reading the cases below cannot crash).
     for (r, path) in readers.iter().zip(shards) {
-        r.check_cases().map_err(OutputError::file(path))?;
+        r.verify().map_err(OutputError::file(path))?;
     }
 
     let mut layout: Layout = first.clone();
@@ -291,8 +304,16 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             .push(("history".to_owned(), AttrValue::Str(line))),
     }
     let (_, partial) = side_paths(output);
+    ensure(!partial.exists(), || {
+        format!(
+            "{} is in the way: the merge writes there, and studyrun removes only its own \
+             files; move or remove it yourself",
+            partial.display()
+        )
+    })?;
     let to_partial = OutputError::file(&partial);
     let mut writer = StudyWriter::create(&partial, &layout).map_err(OutputError::file(&partial))?;
+    let mut unfinished = RemoveOnDrop(Some(&partial));
     for k in 0..layout.reference_ids.len() {
         let series = readers[0]
             .read_reference(k)
@@ -341,11 +362,23 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             .map_err(OutputError::file(&partial))?;
     }
     writer.finish().map_err(to_partial)?;
-    std::fs::rename(&partial, output).map_err(OutputError::io(
+    super::rename_durably(&partial, output).map_err(OutputError::io(
         format!("rename {} to", partial.display()),
         output,
     ))?;
+    unfinished.0 = None;
     Ok(order.len())
+}
+
+/// The merge's partial file, removed when the merge stops before renaming it.
+struct RemoveOnDrop<'a>(Option<&'a Path>);
+
+impl Drop for RemoveOnDrop<'_> {
+    fn drop(&mut self) {
+        if let Some(path) = self.0 {
+            let _ = std::fs::remove_file(path);
+        }
+    }
 }
 
 /// The merge's `history` line: `<now>: studyrun merge [--force] OUTPUT SHARD...`.

@@ -83,7 +83,7 @@ mod writer;
 pub use dimension_scales::ScaleError;
 pub use encode::ChunkEncoder;
 pub use error::{OutputError, StudyFileError};
-pub use inspect::{inspect, Summary};
+pub use inspect::{inspect, verify, Summary};
 pub use layout::{
     command_line, history_line, provenance, shell_word, AttrValue, Layout, Param, ParamValues,
     Status, Storage, VarSpec, CASE, ERROR_MESSAGE, FREQUENCY, MAX_ID, ORDER, REFERENCE,
@@ -91,6 +91,9 @@ pub use layout::{
 };
 pub use lock::OutputLock;
 pub use merge::merge;
-pub use paths::{new_journal_path, side_paths, with_suffix, DataFile};
+pub use paths::{
+    new_journal_path, remove_durably, rename_durably, side_paths, sync_file, sync_parent,
+    with_suffix, DataFile,
+};
 pub use reader::{CaseData, StudyReader};
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};

@@ -3,7 +3,8 @@
 //!
 //! - an output (and its side files: journal, partial files, lock) is a regular file
 //!   or nothing: never a directory, a FIFO, a device, a socket or a symbolic link
-//!   (whatever it points to), with or without `--force`;
+//!   (whatever it points to), with or without `--force`; a side file is no hard link
+//!   either (it is written in place);
 //! - it is none of the command's inputs (the grid file, a shard), compared by device
 //!   and inode, so another spelling of the same path is caught;
 //! - `--force` replaces only a studyrun study file (one [`StudyReader::open`] opens:
@@ -98,13 +99,29 @@ pub fn check_replaceable(output: &Path) -> Result<(), OutputError> {
     }
 }
 
+/// [`check_path`] for a file beside an output that a command writes in place (journal,
+/// partial files, lock): also refuses a hard link, whose other names would see the
+/// writes.
+pub fn check_side_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, OutputError> {
+    let exists = check_path(path, what, inputs)?;
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.nlink() > 1 => Err(OutputError::Refused(format!(
+            "{} ({what}) is a hard link ({} names share the file); studyrun writes through \
+             no links: remove it or give another output",
+            path.display(),
+            m.nlink()
+        ))),
+        _ => Ok(exists),
+    }
+}
+
 /// Checks `output` for a command that writes it from scratch (`merge`, `accuracy`):
 /// refuses what [`check_path`] refuses, an existing file without `force`, and with
 /// `force` anything but a study file. Returns whether a file is there to replace.
 pub fn check_output(output: &Path, force: bool, inputs: &[&Path]) -> Result<bool, OutputError> {
     let exists = check_path(output, "the output", inputs)?;
     for (side, what) in side_files(output) {
-        check_path(&side, what, inputs)?;
+        check_side_path(&side, what, inputs)?;
     }
     if exists {
         if !force {

@@ -80,6 +80,44 @@ pub fn new_journal_path(output: &Path) -> PathBuf {
     with_suffix(output, ".journal.new")
 }
 
+/// Flushes the file at `path` to the disk (`fsync`).
+pub fn sync_file(path: &Path) -> std::io::Result<()> {
+    std::fs::File::open(path)?.sync_all()
+}
+
+/// Flushes the directory that holds `path` to the disk, so that a rename, creation
+/// or removal of `path` outlives a power loss.
+pub fn sync_parent(path: &Path) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match std::fs::File::open(dir)?.sync_all() {
+        // File systems that cannot flush a directory (EINVAL) keep renames in order
+        // without it.
+        Err(e) if e.raw_os_error() == Some(libc::EINVAL) => Ok(()),
+        other => other,
+    }
+}
+
+/// Renames `from` to `to` so that `to` is whole on the disk before the rename and the
+/// rename itself is on the disk when this returns: `fsync` of the file, `rename`,
+/// `fsync` of the directory.
+pub fn rename_durably(from: &Path, to: &Path) -> std::io::Result<()> {
+    sync_file(from)?;
+    std::fs::rename(from, to)?;
+    sync_parent(to)
+}
+
+/// Removes the file at `path` and flushes its directory (a missing file is no error).
+pub fn remove_durably(path: &Path) -> std::io::Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e),
+        Ok(()) => sync_parent(path),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -51,7 +51,7 @@ pub struct StudyReader {
     /// `error_message`, read whole at open (it is small).
     messages: Vec<String>,
     /// Kept open for the datasets' lifetime.
-    _file: File,
+    file: File,
 }
 
 impl std::fmt::Debug for StudyReader {
@@ -98,6 +98,44 @@ impl StudyReader {
         }
     }
 
+    /// Reads every value of the file's variables and so checks every checksum: the
+    /// Fletcher-32 of every chunk (HDF5 checks it on reading) and the digest of every
+    /// string variable (checked at open); the reads are first checked for crashes
+    /// ([`StudyReader::check_cases`]). Returns the variables that carry no checksum (a
+    /// netCDF tool's rewrite may drop them): none in a file studyrun wrote.
+    pub fn verify(&self) -> Result<Vec<String>, StudyFileError> {
+        self.check_cases()?;
+        for k in 0..self.layout.n_references() {
+            self.read_reference(k)?;
+        }
+        for row in 0..self.layout.n_cases() {
+            self.read_case(row)?;
+        }
+        let mut unchecked = Vec::new();
+        for name in member_names(&self.file).at(&self.path, "/")? {
+            let Ok(ds) = self.file.dataset(&name) else {
+                continue;
+            };
+            text::check_attributes_digest(&ds).at(&self.path, &name)?;
+            let string = matches!(
+                ds.dtype().and_then(|t| t.to_descriptor()),
+                Ok(TypeDescriptor::VarLenUnicode | TypeDescriptor::VarLenAscii)
+            );
+            let checked = if string {
+                ds.attr_names()
+                    .at(&self.path, &name)?
+                    .iter()
+                    .any(|a| a == text::DIGEST_ATTR)
+            } else {
+                ds.filters().contains(&Filter::Fletcher32)
+            };
+            if !checked {
+                unchecked.push(name);
+            }
+        }
+        Ok(unchecked)
+    }
+
     /// [`StudyReader::open`] without the check in a child process.
     pub(super) fn open_unchecked(path: &Path) -> Result<Self, StudyFileError> {
         let path = path.to_owned();
@@ -111,6 +149,12 @@ impl StudyReader {
             }
             Err(e) => return Err(not_hdf5(format!("cannot be read: {e}"))),
             Ok(m) if m.is_dir() => return Err(not_hdf5("is a directory, not a study file".into())),
+            // libhdf5 would wait for a FIFO's writer for ever.
+            Ok(m) if !m.is_file() => {
+                return Err(not_hdf5(
+                    "is not a regular file (a FIFO, device or socket), not a study file".into(),
+                ))
+            }
             Ok(_) => {}
         }
         let file = match File::open(&path) {
@@ -127,7 +171,7 @@ impl StudyReader {
             layout,
             rows,
             messages,
-            _file: file,
+            file,
         })
     }
 
@@ -260,6 +304,7 @@ pub(super) fn read_messages(
     path: &Path,
 ) -> Result<Vec<String>, StudyFileError> {
     let messages = text::read_dataset_text(ds).at(path, ERROR_MESSAGE)?;
+    text::check_digest(ds, text::DIGEST_ATTR, &messages, "strings").at(path, ERROR_MESSAGE)?;
     if messages.len() != n {
         return Err(StudyFileError::Format {
             path: path.to_owned(),
@@ -362,12 +407,15 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
     for name in member_names(file).at(path, "/")? {
         let ds = match file.dataset(&name) {
             Ok(ds) => ds,
-            Err(_) => continue, // not a dataset: not ours
+            Err(_) if file.group(&name).is_ok() => continue, // a group: not ours
+            // A variable whose object header cannot be read: damage, not absence.
+            Err(e) => return Err(e).at(path, &name),
         };
         let attribute_names = ds.attr_names().at(path, &name)?;
         if !attribute_names.iter().any(|a| a == ROLE_ATTR) {
             continue; // coordinates, built-ins and variables others added
         }
+        text::check_attributes_digest(&ds).at(path, &name)?;
         let role_name = attributes::read_str(&ds, ROLE_ATTR).at(path, &name)?;
         let role = Role::parse(&role_name)
             .ok_or_else(|| format(format!("unknown {ROLE_ATTR} {role_name:?}"), &name))?;
@@ -445,7 +493,56 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
     })?;
     restore_written_times(&mut layout);
     layout.validate().map_err(|reason| format(reason, "/"))?;
+    check_case_ids(&layout).map_err(|reason| format(reason, CASE))?;
     Ok(layout)
+}
+
+/// Checks the case ids against the root attributes of a study's file: every id below
+/// `study_cases` (the study's case count), each in the file's shard (`shard` = `K/N`
+/// holds the ids `id mod N = K − 1`), as many as `file_cases`. A layout without these
+/// attributes (not a study's) passes.
+fn check_case_ids(layout: &Layout) -> Result<(), String> {
+    let attribute = |name: &str| {
+        layout
+            .attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+    };
+    if let Some(&AttrValue::I64(n)) = attribute("file_cases") {
+        if usize::try_from(n).ok() != Some(layout.n_cases()) {
+            return Err(format!(
+                "{} cases, but the file_cases attribute says {n}",
+                layout.n_cases()
+            ));
+        }
+    }
+    if let Some(&AttrValue::I64(n)) = attribute("study_cases") {
+        if let Some(id) = layout.case_ids.iter().find(|&&id| id >= n.max(0) as u64) {
+            return Err(format!(
+                "case id {id} is out of range: the study has {n} cases, ids 0 to {}",
+                n - 1
+            ));
+        }
+    }
+    if let Some(AttrValue::Str(text)) = attribute("shard").filter(|v| v.as_text() != Some("")) {
+        let shard: crate::study::Shard = text
+            .parse()
+            .map_err(|e| format!("the shard attribute: {e}"))?;
+        if let Some(id) = layout
+            .case_ids
+            .iter()
+            .find(|&&id| id % shard.n != shard.k - 1)
+        {
+            return Err(format!(
+                "case id {id} does not belong to shard {shard} (its ids are those with \
+                 id mod {} = {})",
+                shard.n,
+                shard.k - 1
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Largest move of a `time` value taken for a tool's rewrite of it (s): decoding `time`
@@ -565,6 +662,7 @@ fn read_param(ds: &Dataset, spec: VarSpec, path: &Path) -> Result<Param, StudyFi
         TypeDescriptor::Float(_) => ParamValues::F64(ds.read_raw::<f64>().at(path, &name)?),
         other => {
             if let Strings::Text(v) = text::read_dataset(ds).at(path, &name)? {
+                text::check_digest(ds, text::DIGEST_ATTR, &v, "strings").at(path, &name)?;
                 return Ok(Param {
                     spec,
                     values: ParamValues::Str(v),

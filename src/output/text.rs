@@ -81,6 +81,92 @@ pub(super) fn read_dataset(ds: &Dataset) -> hdf5::Result<Strings> {
     })
 }
 
+/// The attribute holding the CRC-32 of a string variable's strings ([`digest`]): what
+/// checks them, as HDF5 applies no filter (Fletcher-32) to variable-length strings.
+pub(super) const DIGEST_ATTR: &str = "studyrun_crc32";
+
+/// CRC-32 (zlib's) of `strings`: of each one's length in bytes (u64, little-endian)
+/// followed by its UTF-8 bytes.
+pub(super) fn digest<S: AsRef<str>>(strings: &[S]) -> i64 {
+    let crc = strings.iter().fold(0, |crc, s| {
+        let b = s.as_ref().as_bytes();
+        let crc = zlib_rs::crc32::crc32(crc, &(b.len() as u64).to_le_bytes());
+        zlib_rs::crc32::crc32(crc, b)
+    });
+    i64::from(crc)
+}
+
+/// The attribute holding the CRC-32 ([`digest`]) of a variable's text attributes
+/// [`DESCRIBED_BY`] (an absent one counting as empty): what checks them, as HDF5
+/// checksums no object header of the file's format.
+pub(super) const ATTRIBUTES_DIGEST_ATTR: &str = "studyrun_attributes_crc32";
+
+/// The attributes [`ATTRIBUTES_DIGEST_ATTR`] covers.
+pub(super) const DESCRIBED_BY: [&str; 3] = ["units", "long_name", super::layout::ROLE_ATTR];
+
+/// Writes the digest attribute `name` of the variable `ds` over `strings` (replacing
+/// the one there).
+pub(super) fn write_digest<S: AsRef<str>>(
+    ds: &Dataset,
+    name: &str,
+    strings: &[S],
+) -> hdf5::Result<()> {
+    let attr = match ds.attr(name) {
+        Ok(attr) => attr,
+        Err(_) => ds.new_attr::<i64>().create(name)?,
+    };
+    attr.write_scalar(&digest(strings))
+}
+
+/// Checks `strings`, read from `ds`, against its digest attribute `name` if it has one
+/// (a netCDF tool's rewrite may have left none); `what` names them in the error.
+pub(super) fn check_digest<S: AsRef<str>>(
+    ds: &Dataset,
+    name: &str,
+    strings: &[S],
+    what: &str,
+) -> hdf5::Result<()> {
+    if !ds.attr_names()?.iter().any(|n| n == name) {
+        return Ok(());
+    }
+    // netCDF tools rewrite a scalar attribute as a one-element array.
+    let stored = ds.attr(name)?.read_raw::<i64>()?;
+    if stored != [digest(strings)] {
+        return Err(format!(
+            "its {what} do not match their checksum ({name}): the file is damaged, or \
+             they were changed since studyrun wrote them"
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// The text attributes [`DESCRIBED_BY`] of `ds`, an absent one as "".
+pub(super) fn described_by(ds: &Dataset) -> hdf5::Result<Vec<String>> {
+    let names = ds.attr_names()?;
+    DESCRIBED_BY
+        .iter()
+        .map(|&a| {
+            if names.iter().any(|n| n == a) {
+                super::attributes::read_str(ds, a)
+            } else {
+                Ok(String::new())
+            }
+        })
+        .collect()
+}
+
+/// Checks the text attributes of `ds` against their digest, if it has one.
+pub(super) fn check_attributes_digest(ds: &Dataset) -> hdf5::Result<()> {
+    let values = described_by(ds)?;
+    check_digest(
+        ds,
+        ATTRIBUTES_DIGEST_ATTR,
+        &values,
+        "attributes (units, long_name)",
+    )
+}
+
 /// Reads the strings of a dataset that must hold text.
 pub(super) fn read_dataset_text(ds: &Dataset) -> hdf5::Result<Vec<String>> {
     match read_dataset(ds)? {

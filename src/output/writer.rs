@@ -4,14 +4,14 @@ use std::path::{Path, PathBuf};
 
 use hdf5::plist::file_access::{FileAccessBuilder, MetadataCacheConfig};
 use hdf5::plist::file_create::{AttrCreationOrder, LinkCreationOrder};
-use hdf5::types::VarLenUnicode;
+use hdf5::types::{TypeDescriptor, VarLenUnicode};
 use hdf5::{Dataset, File, H5Type};
 
 use super::attributes;
 use super::datasets::{check_row, RowDatasets};
 use super::dimension_scales::{attach_scale, set_scale};
 use super::direct_chunk::{chunked_by_row, write_row_chunk};
-use super::encode::ChunkEncoder;
+use super::encode::{self, ChunkEncoder};
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
@@ -20,6 +20,7 @@ use super::layout::{
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
+use super::text;
 
 /// One finished (or failed) case, borrowed from the caller.
 ///
@@ -79,10 +80,11 @@ impl Row for [f64] {
 impl Row for [u8] {
     fn misfit(&self, len: usize, encoder: &ChunkEncoder) -> Option<String> {
         let storage = encoder.storage();
-        let raw = len * if storage.float32 { 4 } else { 8 };
+        // The row's bytes (unfiltered) and the Fletcher-32 checksum.
+        let raw = len * if storage.float32 { 4 } else { 8 } + 4;
         if storage.deflate_level == 0 && self.len() != raw {
             Some(format!(
-                "an unfiltered chunk of {} bytes, the row has {raw}",
+                "an unfiltered chunk of {} bytes, the row and its checksum have {raw}",
                 self.len()
             ))
         } else if storage.deflate_level > 0 && self.is_empty() {
@@ -222,6 +224,9 @@ impl Scalars {
         self.messages
             .0
             .write_raw(&messages)
+            .and_then(|()| {
+                text::write_digest(&self.messages.0, text::DIGEST_ATTR, &self.messages.1)
+            })
             .at(path, ERROR_MESSAGE)?;
         self.status.0.write_raw(&self.status.1).at(path, STATUS)?;
         self.dirty = false;
@@ -303,12 +308,17 @@ impl StudyWriter {
             .zip(&layout.series)
             .chain(rows.spectra.iter().zip(&layout.spectra))
             .chain(rows.reference_series.iter().zip(&layout.reference_series));
+        let filters = encode::filters(layout.storage);
         for (ds, spec) in arrays {
-            if !chunked_by_row(ds) {
+            if !chunked_by_row(ds) || ds.filters() != filters {
                 return Err(StudyFileError::Format {
                     path,
                     variable: spec.name.clone(),
-                    reason: format!("chunks {:?}, not one row per chunk", ds.chunk()),
+                    reason: format!(
+                        "chunks {:?} with the filters {:?}, not one row per chunk with {filters:?}",
+                        ds.chunk(),
+                        ds.filters()
+                    ),
                 });
             }
         }
@@ -627,6 +637,8 @@ impl Creator<'_> {
         // Empty strings rather than HDF5's null fill, which netCDF-C shows as NIL.
         let empty = vec![VarLenUnicode::new(); l.n_cases()];
         let ds = self.with_data(ERROR_MESSAGE, &empty)?;
+        text::write_digest(&ds, text::DIGEST_ATTR, &vec![""; l.n_cases()])
+            .at(self.path, ERROR_MESSAGE)?;
         self.finish_var(&ds, &spec, None, &[&case])?;
 
         for spec in &l.metrics {
@@ -685,8 +697,8 @@ impl Creator<'_> {
         Ok(())
     }
 
-    /// The `[case, dim]` variables `specs` (`len` columns), float64, contiguous:
-    /// written whole, like the `[case]` metrics.
+    /// The `[case, dim]` variables `specs` (`len` columns), float64, checksummed in
+    /// [`whole_chunks`]: written whole, like the `[case]` metrics.
     fn whole_rows(
         &self,
         dim: &Dataset,
@@ -696,11 +708,14 @@ impl Creator<'_> {
         case: &Dataset,
     ) -> Result<(), StudyFileError> {
         for spec in specs {
+            let shape = [self.layout.n_cases(), len];
             let ds = self
                 .file
                 .new_dataset::<f64>()
                 .fill_value(f64::NAN)
-                .shape([self.layout.n_cases(), len])
+                .chunk(whole_chunks(&shape))
+                .fletcher32()
+                .shape(shape)
                 .create(spec.name.as_str())
                 .at(self.path, &spec.name)?;
             self.finish_var(&ds, spec, Some(role), &[case, dim])?;
@@ -758,6 +773,8 @@ impl Creator<'_> {
         })?;
         attributes::write_str(&ds, "units", units).at(self.path, name)?;
         attributes::write_str(&ds, "long_name", long_name).at(self.path, name)?;
+        text::write_digest(&ds, text::ATTRIBUTES_DIGEST_ATTR, &[units, long_name, ""])
+            .at(self.path, name)?;
         // netCDF-C's dimension id, kept in file order like netCDF-C writes it.
         ds.new_attr::<i32>()
             .create("_Netcdf4Dimid")
@@ -776,7 +793,9 @@ impl Creator<'_> {
                     .map(|s| attributes::vlen(s))
                     .collect::<hdf5::Result<Vec<_>>>()
                     .at(self.path, &p.spec.name)?;
-                self.with_data(&p.spec.name, &strings)?
+                let ds = self.with_data(&p.spec.name, &strings)?;
+                text::write_digest(&ds, text::DIGEST_ATTR, v).at(self.path, &p.spec.name)?;
+                ds
             }
         };
         self.finish_var(&ds, &p.spec, Some(role), &[dim])
@@ -801,17 +820,22 @@ impl Creator<'_> {
         fill_attr(&ds, self.layout.storage.float32).at(self.path, &spec.name)
     }
 
-    /// A contiguous 1-D variable holding `data`.
+    /// A 1-D variable holding `data`: numbers checksummed (Fletcher-32, in
+    /// [`whole_chunks`]); variable-length strings contiguous, as HDF5 applies no
+    /// filter to them (their digest attribute checks them, see `text`).
     fn with_data<T: H5Type>(&self, name: &str, data: &[T]) -> Result<Dataset, StudyFileError> {
-        self.file
-            .new_dataset_builder()
-            .with_data(data)
-            .create(name)
-            .at(self.path, name)
+        let builder = self.file.new_dataset_builder().with_data(data);
+        let builder = if is_string::<T>() {
+            builder
+        } else {
+            builder.chunk(whole_chunks(&[data.len()])).fletcher32()
+        };
+        builder.create(name).at(self.path, name)
     }
 
-    /// An unwritten variable of `shape` with `fill`; 2-D variables are chunked one row
-    /// per chunk and filtered per the storage options, 1-D ones are contiguous.
+    /// An unwritten variable of `shape` with `fill`, checksummed (Fletcher-32); 2-D
+    /// variables are chunked one row per chunk and filtered per the storage options
+    /// (shuffle and deflate before the checksum), 1-D ones as [`whole_chunks`] says.
     fn empty<T: H5Type>(
         &self,
         name: &str,
@@ -820,11 +844,11 @@ impl Creator<'_> {
     ) -> Result<Dataset, StudyFileError> {
         let mut builder = self.file.new_dataset::<T>().fill_value(fill);
         if let [_, cols] = *shape {
-            builder = builder.chunk((1, cols));
-            let level = self.layout.storage.deflate_level;
-            if level > 0 {
-                builder = builder.shuffle().deflate(level);
-            }
+            builder = builder
+                .chunk((1, cols.max(1)))
+                .set_filters(&encode::filters(self.layout.storage));
+        } else {
+            builder = builder.chunk(whole_chunks(shape)).fletcher32();
         }
         builder.shape(shape).create(name).at(self.path, name)
     }
@@ -854,8 +878,37 @@ impl Creator<'_> {
         if let Some(role) = role {
             attributes::write_str(ds, ROLE_ATTR, role.as_str()).at(self.path, name)?;
         }
-        Ok(())
+        let described = [
+            spec.units.as_str(),
+            &spec.long_name,
+            role.map_or("", Role::as_str),
+        ];
+        text::write_digest(ds, text::ATTRIBUTES_DIGEST_ATTR, &described).at(self.path, name)
     }
+}
+
+/// Elements in a chunk of a variable written whole (1-D variables, `[case, dim]`
+/// metrics): 512 KiB of float64, so a chunk fits HDF5's 1 MiB chunk cache and reading
+/// the cases one by one reads each chunk (and checks its checksum) once.
+const WHOLE_CHUNK_ELEMENTS: usize = 1 << 16;
+
+/// The chunk shape of a variable of `shape` written whole: whole rows, as many as
+/// [`WHOLE_CHUNK_ELEMENTS`] allows (at least one); every extent at least 1, as HDF5
+/// needs, also for an empty variable.
+fn whole_chunks(shape: &[usize]) -> Vec<usize> {
+    let cols: usize = shape.iter().skip(1).product::<usize>().max(1);
+    let rows = (WHOLE_CHUNK_ELEMENTS / cols).clamp(1, shape.first().copied().unwrap_or(1).max(1));
+    std::iter::once(rows)
+        .chain(shape.iter().skip(1).map(|&d| d.max(1)))
+        .collect()
+}
+
+/// Whether `T` is a variable-length string type.
+fn is_string<T: H5Type>() -> bool {
+    matches!(
+        T::type_descriptor(),
+        TypeDescriptor::VarLenUnicode | TypeDescriptor::VarLenAscii
+    )
 }
 
 /// Ids as stored: int32, CF-1.8's widest integer (the layout checked that they fit).

@@ -45,10 +45,13 @@ use std::path::Path;
 
 use super::case::CaseResult;
 use crate::output::{
-    ChunkEncoder, DataFile, EncodedRecord, Status, Storage, StudyFileError, StudyWriter,
+    sync_parent, ChunkEncoder, DataFile, EncodedRecord, Status, Storage, StudyFileError,
+    StudyWriter,
 };
 
-const MAGIC: &[u8; 8] = b"SRJOURN3";
+const MAGIC: &[u8; 8] = b"SRJOURN4";
+/// What the magic of every studyrun journal format starts with.
+const MAGIC_STEM: &[u8; 7] = b"SRJOURN";
 const RECORD: &[u8; 4] = b"CASE";
 /// Bytes of a record before its message: tag, row, status, message length.
 const FIXED: usize = 4 + 8 + 1 + 4;
@@ -201,12 +204,17 @@ pub struct JournalWriter {
 
 impl JournalWriter {
     /// A new journal at `path` (replacing any file there) of cases whose chunks lie in
-    /// the partial file `data`.
+    /// the partial file `data`; its header and its name are on the disk when this
+    /// returns.
     pub fn create(path: &Path, header: &JournalHeader, data: DataFile) -> io::Result<Self> {
         let mut file = File::create(path)?;
         let mut b = header.bytes();
         b.push(data.code());
+        let sum = checksum(&b);
+        b.extend(sum.to_le_bytes());
         file.write_all(&b)?;
+        file.sync_all()?;
+        sync_parent(path)?;
         Ok(Self {
             file,
             buf: Vec::new(),
@@ -371,6 +379,14 @@ pub enum JournalError {
         /// The journal.
         path: String,
     },
+    /// The journal's header is damaged: it cannot say which study it belongs to.
+    #[error("the journal {path} is damaged ({what}); run with --force to start over")]
+    Damaged {
+        /// The journal.
+        path: String,
+        /// What is wrong with its header.
+        what: &'static str,
+    },
     /// The journal was written for another study, version, shard or journal format.
     #[error("the journal {path} belongs to a different study, studyrun version or shard; run with --force to start over")]
     Mismatch {
@@ -388,19 +404,34 @@ impl JournalReader {
         };
         let mut input = BufReader::new(File::open(path).map_err(io_err)?);
         let want = expected.bytes();
-        let mut got = vec![0u8; want.len() + 1];
-        let data = match input.read_exact(&mut got) {
-            Ok(()) if got[..want.len()] == want[..] => DataFile::from_code(got[want.len()]),
+        let mut got = vec![0u8; want.len() + 1 + 4];
+        match input.read_exact(&mut got) {
+            Ok(()) => {}
             Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => {
                 return Err(JournalError::Unstarted {
                     path: path.display().to_string(),
                 })
             }
-            _ => None,
-        };
-        let data = data.ok_or_else(|| JournalError::Mismatch {
+            Err(e) => return Err(io_err(e)),
+        }
+        let damaged = |what| JournalError::Damaged {
             path: path.display().to_string(),
-        })?;
+            what,
+        };
+        let (content, sum) = got.split_at(want.len() + 1);
+        if !content.starts_with(MAGIC_STEM) {
+            return Err(damaged("it does not start like a studyrun journal"));
+        }
+        if content.starts_with(MAGIC) && checksum(content).to_le_bytes() != sum {
+            return Err(damaged("its header's checksum does not match"));
+        }
+        if content[..want.len()] != want[..] {
+            return Err(JournalError::Mismatch {
+                path: path.display().to_string(),
+            });
+        }
+        let data = DataFile::from_code(content[want.len()])
+            .ok_or_else(|| damaged("it names no partial file"))?;
         Ok(Self {
             input,
             header: *expected,
@@ -576,7 +607,7 @@ mod tests {
         let (_dir, path, data, header, written) = scene(7, &[(4, true), (1, false), (2, true)]);
         let full = write_journal(&path, &data, &header, &written);
         // A kill in the middle of a fourth record leaves a torn tail.
-        let torn = std::fs::read(&path).unwrap()[header.bytes().len() + 1..][..40].to_vec();
+        let torn = std::fs::read(&path).unwrap()[header.bytes().len() + 5..][..40].to_vec();
         let mut f = std::fs::OpenOptions::new()
             .append(true)
             .open(&path)
@@ -614,6 +645,28 @@ mod tests {
                 JournalReader::open(&path, &other),
                 Err(JournalError::Mismatch { .. })
             ));
+        }
+    }
+
+    #[test]
+    fn a_damaged_header_is_reported_as_damage_not_as_another_study() {
+        let (_dir, path, data, header, written) = scene(9, &[(0, true)]);
+        write_journal(&path, &data, &header, &written);
+        let good = std::fs::read(&path).unwrap();
+        for (at, want) in [
+            (0, "does not start like"),
+            (12, "checksum"),
+            (70, "checksum"),
+        ] {
+            let mut bytes = good.clone();
+            bytes[at] ^= 0x04;
+            std::fs::write(&path, bytes).unwrap();
+            match JournalReader::open(&path, &header) {
+                Err(e @ JournalError::Damaged { .. }) => {
+                    assert!(e.to_string().contains(want), "byte {at}: {e}")
+                }
+                other => panic!("byte {at}: {:?}", other.map(|r| r.data_file())),
+            }
         }
     }
 

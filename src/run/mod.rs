@@ -36,8 +36,8 @@ use rayon::prelude::*;
 
 use crate::output::OutputError;
 use crate::output::{
-    new_journal_path, overwrite, side_paths, ChunkEncoder, DataFile, Layout, OutputLock, Status,
-    StudyReader, StudyWriter,
+    new_journal_path, overwrite, remove_durably, rename_durably, side_paths, ChunkEncoder,
+    DataFile, Layout, OutputLock, Status, StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
@@ -106,19 +106,10 @@ fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
         .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }
 
-/// Removes the file at `path` if there is one.
-fn remove_if_exists(path: &Path) -> Result<(), OutputError> {
-    match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            Err(OutputError::io("remove", path)(e))
-        }
-        _ => Ok(()),
-    }
-}
-
-/// Renames `from` to `to` (atomic within a file system).
+/// Renames `from` to `to` (atomic within a file system), both on the disk when it
+/// returns ([`rename_durably`]).
 fn rename(from: &Path, to: &Path) -> Result<(), OutputError> {
-    std::fs::rename(from, to).map_err(OutputError::io(format!("rename {} to", from.display()), to))
+    rename_durably(from, to).map_err(OutputError::io(format!("rename {} to", from.display()), to))
 }
 
 /// The ideal-mechanism runs every case is compared with.
@@ -179,22 +170,26 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         n_metrics: layout.n_metric_values() as u64,
         storage: layout.storage,
     };
-    let reader = match decide_start(study, opts, &header, rows.len(), start)? {
+    let (journal_path, _) = side_paths(&opts.output);
+    let begin = match decide_start(study, opts, &header, rows.len(), start)? {
         Start::Complete(summary) => return Ok(summary),
-        Start::Fresh => None,
-        Start::Resume(reader) => Some(reader),
+        // A fresh run's journal comes first, so that every partial file of a run has
+        // its journal beside it: a partial file without one is not studyrun's.
+        Start::Fresh => Begin::Fresh(
+            JournalWriter::create(&journal_path, &header, DataFile::Partial)
+                .map_err(OutputError::io("create", &journal_path))?,
+        ),
+        Start::Resume(reader) => Begin::Resume(reader),
     };
     let mut stats = RunStats::default();
-    let (mut writer, references, data) =
-        create_file(study, opts, &layout, reader.as_ref(), &mut stats)?;
-    let (journal_path, _) = side_paths(&opts.output);
-    let (mut journal, replayed) = match reader {
-        Some(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
-        None => (
-            JournalWriter::create(&journal_path, &header, data)
-                .map_err(OutputError::io("create", &journal_path))?,
-            Replayed::default(),
-        ),
+    let resuming = match &begin {
+        Begin::Resume(reader) => Some(reader),
+        Begin::Fresh(_) => None,
+    };
+    let (mut writer, references, data) = create_file(study, opts, &layout, resuming, &mut stats)?;
+    let (mut journal, replayed) = match begin {
+        Begin::Resume(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
+        Begin::Fresh(journal) => (journal, Replayed::default()),
     };
     let resumed = replayed.done.len();
     let mut pending: Vec<usize> = (0..rows.len())
@@ -235,9 +230,11 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let cpu = thread_cpu();
     writer.finish().map_err(OutputError::file(&partial_path))?;
     tally.stats.finish = thread_cpu() - cpu;
+    // On the disk before it is declared complete: the file, then its new name; then
+    // the journal goes.
     rename(&partial_path, &opts.output)?;
     drop(journal);
-    std::fs::remove_file(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
+    remove_durably(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
     Ok(RunSummary {
         cases: rows.len(),
         ok: tally.ok,
@@ -250,16 +247,28 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     })
 }
 
+/// The journal a run starts with: its own (fresh), or an interrupted run's.
+enum Begin {
+    Fresh(JournalWriter),
+    Resume(JournalReader),
+}
+
 /// Decides how a run starts from the journal and result file on disk:
 ///
 /// - a journal of an interrupted run: continue it with `--resume` (it must belong to
 ///   this study and shard), discard it with `--force`, refuse otherwise;
+/// - a journal of this study whose partial file is gone: its run was stopped after it
+///   renamed that file to the output and before it removed the journal (the output
+///   then holds the complete result, checked: the journal is removed and the run goes
+///   on as without it), or right after it created the journal (nothing recorded: the
+///   journal is discarded); anything else is refused;
 /// - no journal and a result file: with `--resume`, a complete result of this study
 ///   and shard is left as it is ([`Start::Complete`]) and anything else refused;
 ///   replaced with `--force`; refused otherwise;
 /// - neither: a fresh run (also with `--resume`, so a job script can always pass it).
 ///
-/// Left-over partial files without a journal belong to no run and are removed.
+/// Partial files and a new journal beside a journal belong to its run and go with
+/// it; without a journal they are not studyrun's and are refused, never removed.
 /// Nothing that is not ours is replaced or removed: the output and its side files
 /// must be regular files (or absent) and none of them the grid file, and `--force`
 /// replaces only a study file ([`overwrite`]).
@@ -272,25 +281,48 @@ fn decide_start(
 ) -> Result<Start, RunError> {
     let output = &opts.output;
     let (journal_path, _) = side_paths(output);
-    let side_files = || {
-        let partials = [DataFile::Partial, DataFile::Resumed].map(|d| d.path(output));
-        [journal_path.clone(), new_journal_path(output)]
-            .into_iter()
-            .chain(partials)
-    };
     let exists = check_paths(study, output)?;
     if journal_path.exists() {
-        if opts.resume {
-            match JournalReader::open(&journal_path, header) {
-                Ok(reader) => return Ok(Start::Resume(reader)),
-                // Its run stopped before it recorded a case: start afresh, as
-                // without a journal.
-                Err(JournalError::Unstarted { .. }) => {}
-                Err(e) => return Err(e.into()),
+        match JournalReader::open(&journal_path, header) {
+            Ok(reader) if !reader.data_file().path(output).exists() && !opts.force => {
+                let finished = exists && complete_result(study, opts, n_rows, start).is_ok();
+                if !finished && !recorded_nothing(&journal_path, header) {
+                    return Err(RunError::refused(format!(
+                        "{} records finished cases of this study, but {}, the partial file \
+                         that holds them, is gone; run with --force to start over",
+                        journal_path.display(),
+                        reader.data_file().path(output).display()
+                    )));
+                }
+                remove_durably(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
             }
-        } else if !opts.force {
+            Ok(reader) if opts.resume => return Ok(Start::Resume(reader)),
+            // Its run stopped before it recorded a case: start afresh, as without a
+            // journal.
+            Err(JournalError::Unstarted { .. }) if opts.resume => {}
+            Err(e) if opts.resume => return Err(e.into()),
+            _ if opts.force => {}
+            _ => {
+                return Err(RunError::refused(format!(
+                    "{} holds an interrupted run; use --resume to continue it or --force to \
+                     start over",
+                    journal_path.display()
+                )))
+            }
+        }
+    }
+    let journal = journal_path.exists();
+    let strays = [
+        DataFile::Partial.path(output),
+        DataFile::Resumed.path(output),
+        new_journal_path(output),
+    ];
+    if !journal {
+        if let Some(stray) = strays.iter().find(|p| p.exists()) {
             return Err(RunError::refused(format!(
-                "{} holds an interrupted run; use --resume to continue it or --force to start over",
+                "{} is in the way: no journal {} says that a studyrun run wrote it, and \
+                 studyrun removes only its own files; move or remove it yourself",
+                stray.display(),
                 journal_path.display()
             )));
         }
@@ -309,10 +341,17 @@ fn decide_start(
         // --force replaces a study result, nothing else.
         overwrite::check_replaceable(output)?;
     }
-    for p in side_files() {
-        remove_if_exists(&p)?;
+    // The discarded run's files, its journal last: a stop on the way leaves a
+    // journal beside whatever of them is left.
+    for p in strays.iter().chain([&journal_path]) {
+        remove_durably(p).map_err(OutputError::io("remove", p))?;
     }
     Ok(Start::Fresh)
+}
+
+/// Whether the journal at `path` (whose header matches `header`) records no case.
+fn recorded_nothing(path: &Path, header: &JournalHeader) -> bool {
+    JournalReader::open(path, header).is_ok_and(|mut r| r.next_entry().is_none())
 }
 
 /// Refuses an output, or a file beside it the run would write or remove, that is not
@@ -322,7 +361,7 @@ fn check_paths(study: &Study, output: &Path) -> Result<bool, RunError> {
     let grid = [study.path.as_path()];
     let exists = overwrite::check_path(output, "the output", &grid)?;
     for (side, what) in overwrite::side_files(output) {
-        overwrite::check_path(&side, what, &grid)?;
+        overwrite::check_side_path(&side, what, &grid)?;
     }
     Ok(exists)
 }
@@ -361,6 +400,9 @@ fn complete_result(
     if statuses.len() != n_rows || statuses.contains(&Status::Pending) {
         return Err(other("it has pending cases"));
     }
+    reader
+        .verify()
+        .map_err(|e| other(&format!("it is damaged: {e}")))?;
     let failed = statuses.iter().filter(|&&s| s == Status::Failed).count();
     Ok(RunSummary {
         cases: n_rows,
@@ -593,7 +635,7 @@ fn replay(
     replayed.journaled = journaled.len();
     rename(&new_journal_path, &journal_path)?;
     drop(old_data);
-    std::fs::remove_file(&old).map_err(OutputError::io("remove", &old))?;
+    remove_durably(&old).map_err(OutputError::io("remove", &old))?;
     Ok((journal, replayed))
 }
 

@@ -130,6 +130,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .map(|c| revolution_count(&c.params.drive(), transient, sampling.duration))
         .max()
         .unwrap_or(0);
+    check_samples_per_revolution(&ctx, &file, revolutions, &sampling)?;
     known.references = references.len() as u64;
     known.revolutions = revolutions as u64;
     memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
@@ -184,4 +185,31 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), len);
     }
+}
+
+/// Refuses a speed that turns the crank more than once per two samples: no series
+/// resolves such a revolution (its crank frequency is above the Nyquist frequency,
+/// rpm > 30 × sample_rate at a constant speed), and its per-revolution values would
+/// outnumber the samples (`grid: {rpm: [1e11]}` asked for 67 million per case).
+fn check_samples_per_revolution(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    revolutions: usize,
+    sampling: &Sampling,
+) -> Result<(), StudyError> {
+    let samples = sampling.len();
+    if revolutions <= samples / 2 {
+        return Ok(());
+    }
+    Err(ctx.err(
+        Some(at(&file.sample_rate.referenced)),
+        "grid",
+        format!(
+            "a case turns the crank {revolutions} times after the transient but is sampled \
+             {samples} times: fewer than 2 samples per revolution, which no series resolves \
+             (its crank frequency is above the Nyquist frequency); the speed must be at \
+             most 30 × sample_rate rpm ({} rpm), or the sample_rate higher",
+            number(30.0 * sampling.sample_rate)
+        ),
+    ))
 }

@@ -450,10 +450,23 @@ pub fn bytes(bytes: f64) -> String {
 }
 
 /// Reads the grid file at `path`, refusing one larger than [`MAX_GRID_BYTES`]
-/// (without reading more than that, so that `/dev/zero` is refused at once).
+/// (without reading more than that, so that `/dev/zero` is refused at once). A FIFO
+/// is opened without waiting for a writer: one nobody writes to reads as empty.
 pub fn read_capped(path: &Path) -> Result<String, String> {
     use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    use std::os::unix::fs::OpenOptionsExt;
+    use std::os::unix::io::AsRawFd;
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| format!("cannot read: {e}"))?;
+    // Reads wait again for data (a pipe's writer may be slower than this process).
+    // SAFETY: fcntl on a descriptor `file` owns.
+    unsafe {
+        let flags = libc::fcntl(file.as_raw_fd(), libc::F_GETFL);
+        libc::fcntl(file.as_raw_fd(), libc::F_SETFL, flags & !libc::O_NONBLOCK);
+    }
     if let Ok(m) = file.metadata() {
         if m.is_dir() {
             return Err("is a directory, not a grid file".into());

@@ -312,6 +312,23 @@ fn join(stack: &[(usize, String)]) -> String {
     out
 }
 
+/// Whether `c` is a control character or an invisible mark that changes how the text
+/// around it is shown: bidirectional controls (U+061C, U+200E–U+200F, U+202A–U+202E,
+/// U+2066–U+2069), zero-width characters (U+200B–U+200D, U+2060–U+2064, U+FEFF) and
+/// the line and paragraph separators U+2028, U+2029.
+pub(crate) fn is_hidden_control(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{061C}'
+                | '\u{200B}'..='\u{200F}'
+                | '\u{2028}'..='\u{202E}'
+                | '\u{2060}'..='\u{2064}'
+                | '\u{2066}'..='\u{2069}'
+                | '\u{FEFF}'
+        )
+}
+
 #[cfg(test)]
 mod tests {
     use super::field_at;

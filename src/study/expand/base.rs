@@ -28,8 +28,8 @@ pub(super) fn check_name(ctx: &Ctx<'_>, name: &S<String>) -> Result<(), StudyErr
         Some("contains `..`")
     } else if n.starts_with('.') {
         Some("starts with a dot (a hidden file)")
-    } else if n.chars().any(char::is_control) {
-        Some("contains a control character")
+    } else if n.chars().any(crate::study::yaml::is_hidden_control) {
+        Some("contains a control character (or a bidirectional or line-separator mark)")
     } else if n.len() > 200 {
         Some("is longer than 200 bytes")
     } else {

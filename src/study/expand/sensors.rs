@@ -10,6 +10,17 @@ use crate::study::config::{SensorSection, S};
 use crate::study::units::Dimension;
 use crate::study::StudyError;
 
+/// The signal-to-noise ratios (dB) a sensor's noise may have: above 300 dB the noise's
+/// amplitude, 10^(−SNR/20) of the signal's, is below 10^−15, the float64 rounding of the
+/// series; below −100 dB it is more than 10^5 times the signal's, whose fourth power
+/// (kurtosis) leaves float64's range for signals above 10^72 and which no metric can
+/// tell from noise anyway (docs/grid-file.md).
+pub(crate) const SNR_DB: std::ops::RangeInclusive<f64> = -100.0..=300.0;
+
+/// Longest sensor name in bytes: its longest derived variable,
+/// `<name>_clean_envelope_order_spectrum` (30 more bytes), fits netCDF's 256-byte names.
+pub(crate) const MAX_SENSOR_NAME: usize = 226;
+
 /// Refuses a sensor of `list` (resolved into `sensors`) whose series `<name>` or
 /// `<name>_clean` is another sensor's or one of `taken`, the names of every other
 /// variable of the study file.
@@ -24,6 +35,17 @@ pub(super) fn check_names(
         let name = &sensor.name;
         let name_at = Some(at(&entry.value.name.referenced));
         let field = format!("sensors[{k}].name");
+        if name.len() > MAX_SENSOR_NAME {
+            return Err(ctx.err(
+                name_at,
+                &field,
+                format!(
+                    "`{name}` is {} bytes long; at most {MAX_SENSOR_NAME}, so that its longest \
+                     variable, `<name>_clean_envelope_order_spectrum`, fits netCDF's 256-byte names",
+                    name.len()
+                ),
+            ));
+        }
         for series in [name.clone(), format!("{name}{CLEAN_SUFFIX}")] {
             if taken.contains(&series) {
                 return Err(ctx.err(
@@ -102,13 +124,17 @@ pub(super) fn sensors(
             None => None,
             Some(n) => {
                 let snr = &n.value.snr_db;
-                if !snr.value.is_finite() {
+                if !(SNR_DB.contains(&snr.value)) {
                     return Err(ctx.err(
                         Some(at(&snr.referenced)),
                         &field("noise.snr_db"),
                         format!(
-                            "{}; expected a finite signal-to-noise ratio in dB",
-                            snr.value
+                            "{} is not allowed: a signal-to-noise ratio from {} to {} dB \
+                             (below, the noise's fourth powers in the metrics overflow; \
+                             above, the noise is under the series' rounding)",
+                            snr.value,
+                            SNR_DB.start(),
+                            SNR_DB.end()
                         ),
                     ));
                 }
