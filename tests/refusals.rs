@@ -343,7 +343,7 @@ fn distinct_references_are_found_by_hashing_not_by_comparing_every_pair() {
         dir.path(),
         "speeds.yaml",
         &format!(
-            "name: s\nduration: 0.01\nsample_rate: 1000\ntransient: 0\nmax_cases: 200000\ngrid:\n  rpm: [{}]\n",
+            "name: s\nduration: 0.001\nsample_rate: 10000\ntransient: 0\nmax_cases: 200000\ngrid:\n  rpm: [{}]\n",
             speeds.join(", ")
         ),
     );

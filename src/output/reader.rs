@@ -526,19 +526,16 @@ fn check_case_ids(layout: &Layout) -> Result<(), String> {
         }
     }
     if let Some(AttrValue::Str(text)) = attribute("shard").filter(|v| v.as_text() != Some("")) {
-        let shard: crate::study::Shard = text
-            .parse()
-            .map_err(|e| format!("the shard attribute: {e}"))?;
-        if let Some(id) = layout
-            .case_ids
-            .iter()
-            .find(|&&id| id % shard.n != shard.k - 1)
-        {
+        let (k, n) = text
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.parse::<u64>().ok()?, n.parse::<u64>().ok()?)))
+            .filter(|&(k, n)| (1..=n).contains(&k))
+            .ok_or_else(|| format!("the shard attribute {text:?} is not K/N with 1 <= K <= N"))?;
+        if let Some(id) = layout.case_ids.iter().find(|&&id| id % n != k - 1) {
             return Err(format!(
-                "case id {id} does not belong to shard {shard} (its ids are those with \
-                 id mod {} = {})",
-                shard.n,
-                shard.k - 1
+                "case id {id} does not belong to shard {k}/{n} (its ids are those with \
+                 id mod {n} = {})",
+                k - 1
             ));
         }
     }
