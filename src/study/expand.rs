@@ -172,21 +172,6 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     Ok(study)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::study::params::ParamDef;
-
-    #[test]
-    fn parameter_names_are_unique() {
-        let mut names: Vec<&str> = PARAMETERS.iter().map(|p: &ParamDef| p.name).collect();
-        names.sort_unstable();
-        let len = names.len();
-        names.dedup();
-        assert_eq!(names.len(), len);
-    }
-}
-
 /// Refuses a speed that turns the crank more than once per two samples: no series
 /// resolves such a revolution (its crank frequency is above the Nyquist frequency,
 /// rpm > 30 × sample_rate at a constant speed), and its per-revolution values would
@@ -212,4 +197,19 @@ fn check_samples_per_revolution(
             number(30.0 * sampling.sample_rate)
         ),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::params::ParamDef;
+
+    #[test]
+    fn parameter_names_are_unique() {
+        let mut names: Vec<&str> = PARAMETERS.iter().map(|p: &ParamDef| p.name).collect();
+        names.sort_unstable();
+        let len = names.len();
+        names.dedup();
+        assert_eq!(names.len(), len);
+    }
 }
