@@ -916,9 +916,9 @@ fn a_fifo_input_is_refused_without_waiting_for_a_writer() {
     // SAFETY: mkfifo with a valid NUL-terminated path.
     assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
     for (args, code) in [
-        (&["inspect", "pipe"][..], 1),
-        (&["inspect", "--verify", "pipe"][..], 1),
-        (&["merge", "out.h5", "pipe"][..], 1),
+        (&["inspect", "pipe"][..], 2),
+        (&["inspect", "--verify", "pipe"][..], 2),
+        (&["merge", "out.h5", "pipe"][..], 2),
         (&["validate", "pipe"][..], 2),
         (&["pipe", "-o", "out.h5", "-q"][..], 2),
     ] {

@@ -334,7 +334,7 @@ fn exit_code(e: &anyhow::Error) -> u8 {
     }
 }
 
-/// `studyrun inspect FILE [--json]`.
+/// `studyrun inspect FILE [--json] [--verify]`.
 fn inspect_command(file: &Path, json: bool, verify: bool) -> Result<u8> {
     let summary = output::Summary::read(file)?;
     let verdict = verify.then(|| output::verify(file)).transpose()?;
