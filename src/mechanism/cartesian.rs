@@ -100,17 +100,16 @@ impl Joints {
     }
 }
 
-/// The ideal mechanism (every joint in `constraints` ideal, gravity in m/s²) with its
-/// positions (m, rad) and velocities (m/s, rad/s) at `t = 0`, which start every case
-/// (paper Table 3): the in-line configuration of crank length `l2` and rod length
-/// `l3` (m), made consistent with the constraints.
-#[allow(clippy::type_complexity)]
+/// The ideal mechanism (every joint in `constraints` ideal, gravity in m/s²)
+/// evaluated at `t = 0`: its positions (m, rad) and velocities (m/s, rad/s) there
+/// start every case (paper Table 3). They are the in-line configuration of crank
+/// length `l2` and rod length `l3` (m), made consistent with the constraints.
 fn ideal_mechanism(
     bodies: &[Body],
     constraints: Vec<Constraint>,
     gravity: Option<f64>,
     (l2, l3): (f64, f64),
-) -> Result<(System<BallBearing>, Vec<f64>, Vec<f64>), ParamError> {
+) -> Result<System<BallBearing>, ParamError> {
     let q_nominal = vec![
         0.5 * l2,
         0.0,
@@ -133,8 +132,7 @@ fn ideal_mechanism(
     ideal
         .evaluate(0.0, &[], false)
         .map_err(|e| ParamError::new("mechanism", "initial configuration", e.to_string()))?;
-    let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
-    Ok((ideal, q0, qd0))
+    Ok(ideal)
 }
 
 impl CartesianSliderCrank {
@@ -162,7 +160,8 @@ impl CartesianSliderCrank {
         let gravity = case.gravity.then_some(GRAVITY);
         let mut ideal_constraints = vec![crank_ground.clone(), crank_rod.clone()];
         ideal_constraints.extend(common.clone());
-        let (ideal, q0, qd0) = ideal_mechanism(&bodies, ideal_constraints, gravity, (l2, l3))?;
+        let ideal = ideal_mechanism(&bodies, ideal_constraints, gravity, (l2, l3))?;
+        let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
         let (kept, independent, bearing) = match case.location {
             Location::Ideal => {
                 return Ok(Self::assemble(
