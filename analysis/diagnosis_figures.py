@@ -7,7 +7,10 @@ PNG and returns its path; it raises ValueError when the study lacks what it need
 `ds` is the flat study Dataset of `studyfile.open_study`; `cases` are positions
 along its `case` dimension, given as {panel label: case} (one panel each, at most
 MAX_PANELS) or for the orbit as {panel title: {curve label: case}}. The computations
-are those of analysis/diagnosis.py (docs/model.md §7.3–§7.7).
+are those of analysis/diagnosis.py (docs/model.md §7.3–§7.7); what is recomputed from
+a stored series uses the series' own rate, `studyfile.series_rate` (sample_rate /
+decimate in a file of `output.decimate`), while the stored spectra and bands are of
+the full-rate series.
 """
 
 import math
@@ -18,6 +21,7 @@ from matplotlib.patches import Rectangle
 
 from analysis import diagnosis
 from analysis.figures import _heatmap, _norm, _save, plt, unit_text
+from analysis.studyfile import series_rate
 
 MAX_PANELS = 6
 """Panels per figure."""
@@ -112,7 +116,7 @@ def case_envelope(ds, channel, case):
         band = tuple(float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
         return ds["frequency"].values, ds[name].values[case], band, True
     _need(ds, channel)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     _, x = diagnosis.window_series(ds, channel, case)
     band = diagnosis.kurtogram(x, fs).band
     freq, amplitude = diagnosis.envelope_spectrum(x, fs, *band)
@@ -161,34 +165,63 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
     return _save(fig, out, dpi)
 
 
+CONTENT_SHARE = 0.995
+"""The share of a series' power a raw spectrogram's frequency axis holds (`content_top`)."""
+
+
+def content_top(series, sample_rate, share=CONTENT_SHARE):
+    """The frequency axis's top (Hz) for the raw spectra of `series` (a list of 1-D
+    sample arrays at `sample_rate`): the lowest frequency below which `share` of their
+    summed power (mean removed) lies, rounded up to 1, 2 or 5 × 10^k Hz, at most the
+    Nyquist frequency sample_rate/2."""
+    nyquist = 0.5 * sample_rate
+    n = min(len(x) for x in series)
+    power = sum(np.abs(np.fft.rfft(np.asarray(x[:n], dtype=float) - np.mean(x[:n]))) ** 2 for x in series)
+    cumulative = np.cumsum(power)
+    if cumulative[-1] <= 0:
+        return nyquist
+    freqs = np.fft.rfftfreq(n, 1.0 / sample_rate)
+    edge = float(freqs[min(np.searchsorted(cumulative, share * cumulative[-1]) + 1, freqs.size - 1)])
+    scale = 10.0 ** math.floor(math.log10(max(edge, 1e-300)))
+    nice = next(m * scale for m in (1, 2, 5, 10) if m * scale >= edge)
+    return min(nyquist, nice)
+
+
 def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=None, dpi=90):
     """STFT of a stored `series` over the analysed window, one panel per
     {label: case}: amplitude (file convention, dB re its largest) against time and
     frequency, segments of `segment` samples (default about 0.1 s, at most a quarter of
-    the window) every segment/4.
+    the window) every segment/4, at the stored series' rate (`series_rate`: a decimated
+    file's series run over the whole duration at sample_rate / decimate).
     With `demodulate` (and a band stored for the case, `<series>_envelope_band_low/
     _high`) the STFT is that of the squared envelope of the band (docs/model.md §7.4,
     mean removed) up to `f_max` (default 2.2 × the fastest BPFI): the fault lines, which
     follow the crank speed, are dashed (1× and 2× of the panel's line: BPFO, BPFI or
-    2·BSF; for `none` BPFO). Else the raw series up to `f_max` (default f_s/2)."""
+    2·BSF; for any other label BPFO). Else the raw series up to `f_max` (default
+    `content_top`: where 99.5 % of the panels' power lies, at most f_s/2)."""
     _need(ds, series)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     if segment is None:
         n = int(diagnosis.analysis_window(ds).sum())
         segment = 1 << min(round(math.log2(0.1 * fs)), int(math.log2(max(n // 4, 2))))
     demodulate = demodulate and f"{series}_envelope_band_low" in ds
-    fig, axes = _panels(len(cases), width=5.2, height=3.2)
-    for ax, (label, case) in zip(axes, cases.items()):
+    panels = {}
+    for label, case in cases.items():
         t, x = diagnosis.window_series(ds, series, case)
+        band = None
         if demodulate:
-            low, high = (float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
-            power = np.abs(diagnosis.analytic_signal(x, fs, low, high)) ** 2
+            band = tuple(float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+            power = np.abs(diagnosis.analytic_signal(x, fs, *band)) ** 2
             x = power - power.mean()
+        panels[label] = (case, t, x, band)
+    raw_top = f_max or (None if demodulate else content_top([x for _, _, x, _ in panels.values()], fs))
+    fig, axes = _panels(len(cases), width=5.2, height=3.2)
+    for ax, (label, (case, t, x, band)) in zip(axes, panels.items()):
         centres, freqs, amp = diagnosis.stft(x, fs, segment, segment // 4)
         centres = centres + t[0]
         _, rpm = diagnosis.crank_motion(ds, case, centres)
         lines = diagnosis.fault_orders(ds, case).lines()
-        top = f_max or (2.2 * lines["BPFI"] * rpm.max() / 60 if demodulate else 0.5 * fs)
+        top = raw_top or 2.2 * lines["BPFI"] * rpm.max() / 60
         keep = (freqs > 0) & (freqs <= top)
         db = 20 * np.log10(np.maximum(amp[:, keep].T, 1e-300) / amp[:, keep].max())
         mesh = ax.pcolormesh(centres, freqs[keep], db, shading="nearest", cmap="magma", vmin=-40, vmax=0)
@@ -198,10 +231,11 @@ def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=Non
                 ax.plot(centres, k * lines[own] * rpm / 60, ls=style, color="cyan", lw=1.0,
                         label=f"{k}× {own} (order {k * lines[own]:.3g})")
             ax.legend(fontsize=7, loc="upper left")
-            what = f"squared envelope of {low:g}–{high:g} Hz"
+            what = f"squared envelope of {band[0]:g}–{band[1]:g} Hz"
         else:
             what = "raw series"
         ax.set_ylim(0, top)
+        ax.set_xlim(t[0], t[-1])
         ax.set_xlabel("time (s)")
         ax.set_ylabel("frequency (Hz)")
         ax.set_title(f"{label}: {what}, {segment / fs:.3g} s segments", fontsize=9)
@@ -219,7 +253,7 @@ def _envelope_rows(ds, channel, case, segment_time):
     rpm = diagnosis.constant_rpm(ds, case)
     if math.isfinite(rpm):
         return [(rpm, ds["frequency"].values, ds[f"{channel}_envelope_spectrum"].values[case])]
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     low, high = (float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
     t, x = diagnosis.window_series(ds, channel, case)
     length = int(round(segment_time * fs))
@@ -275,7 +309,7 @@ def _order_rows(ds, channel, case):
         return ds["order"].values, ds[name].values[case], True
     t, x = diagnosis.window_series(ds, channel, case)
     theta, rpm = diagnosis.crank_motion(ds, case, t)
-    per_revolution = 2 * int(float(ds.attrs["sample_rate"]) * 60 / rpm.max() / 2)
+    per_revolution = 2 * int(series_rate(ds) * 60 / rpm.max() / 2)
     orders, amplitude = diagnosis.order_spectrum(x, theta, per_revolution)
     return orders, amplitude, False
 
@@ -309,12 +343,13 @@ def order_spectra(ds, channel, cases, out, max_order=None, dpi=90):
 
 def kurtogram(ds, series, case, out, dpi=90):
     """The fast kurtogram (docs/model.md §7.6) of a stored `series` of `case`,
-    recomputed over the analysed window: the kurtosis of each band's complex envelope
-    as an image, level against frequency. The band of largest kurtosis is outlined
+    recomputed over the analysed window at the series' stored rate (`series_rate`): the
+    kurtosis of each band's complex envelope as an image, level against frequency up to
+    that rate's Nyquist frequency. The band of largest kurtosis is outlined
     (white), and the band the file records for the case, if it does
     (`<series>_envelope_band_low/_high`), dashed (cyan)."""
     _need(ds, series)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     _, x = diagnosis.window_series(ds, series, case)
     result = diagnosis.kurtogram(x, fs)
     nyquist = 0.5 * fs
@@ -337,7 +372,8 @@ def kurtogram(ds, series, case, out, dpi=90):
                                ls="--", lw=1.5, label=f"band in the file: {s_low:g}–{s_high:g} Hz"))
     ax.set_yticks(range(len(levels)), [f"{level:.1f}" for level in levels])
     ax.set_ylim(len(levels) - 0.5, -0.5)
-    ax.set_xlabel("frequency (Hz)")
+    ax.set_xlim(0.0, nyquist)
+    ax.set_xlabel(f"frequency (Hz), series stored at {fs:g} Hz")
     ax.set_ylabel("level (bands of f_s / 2^(level+1))")
     case_id = int(ds["case"].values[case])
     ax.set_title(f"Fast kurtogram of {series}, case {case_id} ({fault_label(ds, case)})", fontsize=10)

@@ -25,6 +25,7 @@ from analysis.studyfile import (  # noqa: E402
     number_units,
     reference_for,
     select_cases,
+    series_rate,
     spectrum_window,
     unstack,
 )
@@ -218,10 +219,11 @@ def _default_fmax(marks, nyquist):
 
 def ideal_spectra(ds, rows, channel):
     """(frequencies in Hz, amplitudes [len(rows), frequency]) of the ideal mechanism's
-    `channel` for the cases at positions `rows`: its series over the analysed window
-    transformed with the file's spectrum window (`spectrum_window`), as studyrun
-    computes the stored `<channel>_spectrum` of a case."""
-    sample_rate = float(ds.attrs["sample_rate"])
+    `channel` for the cases at positions `rows`: its stored series over the analysed
+    window transformed with the file's spectrum window (`spectrum_window`), as studyrun
+    computes the stored `<channel>_spectrum` of a case. The series are at their stored
+    rate (`series_rate`): a decimated file's reach its Nyquist frequency only."""
+    sample_rate = series_rate(ds)
     window = spectrum_window(ds)
     series = reference_for(ds.isel(case=list(rows)), [channel])[channel].values[:, analysis_window(ds)]
     freq = np.fft.rfftfreq(series.shape[1], 1.0 / sample_rate)

@@ -403,6 +403,17 @@ def select_cases(ds, **params):
     return np.flatnonzero(mask)
 
 
+def series_rate(ds):
+    """The sample rate (Hz) of the stored series: the root attribute
+    `series_sample_rate`, else `sample_rate / decimate` (`decimate` 1 when absent). A
+    file whose grid has `output.decimate: k` stores every k-th output sample, so its
+    series are sampled at `sample_rate / k`, while its spectra, metrics and envelope
+    analysis are of the full-rate series (docs/result-file.md)."""
+    if "series_sample_rate" in ds.attrs:
+        return float(ds.attrs["series_sample_rate"])
+    return float(ds.attrs["sample_rate"]) / int(ds.attrs.get("decimate", 1))
+
+
 def analysis_window(ds):
     """Boolean mask over `time`: the stored samples at transient <= t < duration (s),
     the window the stored metrics and spectra use. It is half-open (the last sample

@@ -8,6 +8,8 @@ Environment:
   STUDYRUN_MERGED_FILE optional, `studyrun merge` of those shards; unset: skip that comparison.
   STUDYRUN_DIAGNOSIS_FILE optional, the result of `studyrun studies/diagnosis.yaml`; unset: the
                        tests run that study with STUDYRUN_BIN (the studyrun binary), or skip.
+  STUDYRUN_BIN         the studyrun binary: runs the diagnosis study decimated by 2 (and other
+                       small studies the tests write); unset: skip those tests.
 """
 
 import os
@@ -78,6 +80,22 @@ def diagnosis_path(tmp_path_factory):
     subprocess.run([binary, str(REPO / "studies/diagnosis.yaml"), "-o", str(out), "-j", "2", "--force", "-q"],
                    check=True)
     return str(out)
+
+
+@pytest.fixture(scope="package")
+def decimated_diagnosis(tmp_path_factory):
+    """studies/diagnosis.yaml with `output: {decimate: 2}` (series stored at 10 kHz of the
+    20 kHz output), run with STUDYRUN_BIN, loaded."""
+    binary = os.environ.get("STUDYRUN_BIN")
+    if not binary:
+        pytest.skip("STUDYRUN_BIN is not set")
+    folder = tmp_path_factory.mktemp("decimated")
+    grid = folder / "decimated.yaml"
+    grid.write_text((REPO / "studies/diagnosis.yaml").read_text() + "output: {decimate: 2}\n")
+    out = folder / "decimated.h5"
+    subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
+    with open_study(out) as ds:
+        yield ds.load()
 
 
 @pytest.fixture(scope="package")

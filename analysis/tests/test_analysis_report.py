@@ -300,7 +300,7 @@ def test_kurtogram_figure_marks_the_band_of_the_file(diagnosis, drawn, tmp_path)
     assert best.get_x() == low
     n = int(dg.analysis_window(diagnosis).sum())
     assert len(ax.get_yticks()) == 2 * dg.kurtogram_depth(n)
-    assert ax.get_xlabel() == "frequency (Hz)"
+    assert ax.get_xlabel() == "frequency (Hz), series stored at 20000 Hz"
 
 
 def test_indicators_over_two_grid_axes(diagnosis, drawn, tmp_path):
