@@ -1,7 +1,8 @@
 """Diagnosis figures of a study file (matplotlib, Agg backend): the journal centre's
 orbit, envelope spectra with the bearing's fault lines and shaft sidebands, a
-spectrogram, a waterfall of envelope spectra over the crank speed, order spectra,
-the fast kurtogram and heatmaps of condition indicators. Each function writes one
+spectrogram, a waterfall of envelope spectra over the crank speed, order spectra, an
+rpm–order map of a run-up, the stored spectral kurtosis, the fast kurtogram and
+heatmaps of condition indicators. Each function writes one
 PNG and returns its path; it raises ValueError when the study lacks what it needs.
 
 `ds` is the flat study Dataset of `studyfile.open_study`; `cases` are positions
@@ -282,7 +283,8 @@ def waterfall(ds, channel, cases, out, f_max=None, segment_time=0.2, dpi=90):
         gap = np.ptp(speeds) / (len(rows) - 1) if np.ptp(speeds) > 0 else 100.0
         for rpm, f, a in rows:
             keep = (f > 0) & (f <= top)
-            height = rpm + 2.5 * gap * a[keep] / a[keep].max()
+            largest = a[keep].max() or 1.0  # a band above a decimated series' Nyquist holds nothing
+            height = rpm + 2.5 * gap * a[keep] / largest
             ax.fill_between(f[keep], rpm, height, color="white", zorder=-rpm)
             ax.plot(f[keep], height, color="k", lw=0.6, zorder=-rpm)
         span = np.array([speeds.min() - gap, speeds.max() + 3 * gap])
@@ -341,6 +343,84 @@ def order_spectra(ds, channel, cases, out, max_order=None, dpi=90):
     return _save(fig, out, dpi)
 
 
+def spectral_kurtosis(ds, channel, cases, out, f_max=None, dpi=90):
+    """The stored spectral kurtosis `<channel>_spectral_kurtosis` (docs/model.md §7.5,
+    dimensionless, 0 for Gaussian noise) against frequency, one panel per
+    {label: case}, up to `f_max` (Hz; default the end of the file's frequency axis),
+    with the band the file records for the case (`<channel>_envelope_band_low/_high`)
+    shaded: where the impacts ring, the kurtosis stands out."""
+    name = f"{channel}_spectral_kurtosis"
+    _need(ds, name, f"{channel}_envelope_band_low")
+    freq = ds["frequency"].values
+    top = f_max or float(freq[-1])
+    keep = (freq >= 0) & (freq <= top)
+    fig, axes = _panels(len(cases))
+    for ax, (label, case) in zip(axes, cases.items()):
+        sk = np.asarray(ds[name].values[case], dtype=float)
+        low, high = (float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+        ax.axvspan(low, high, color="tab:cyan", alpha=0.3, lw=0, label=f"band in the file: {low:g}–{high:g} Hz")
+        ax.plot(freq[keep], sk[keep], color="k", lw=0.7, label=label)
+        ax.axhline(0.0, color="0.5", lw=0.6, ls="--", label="Gaussian noise: 0")
+        peak = int(np.nanargmax(np.where(keep, sk, np.nan)))
+        ax.set_title(f"{label}: largest {sk[peak]:.3g} at {freq[peak]:.0f} Hz", fontsize=9)
+        ax.set_xlim(0, top)
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("spectral kurtosis")
+        ax.grid(alpha=0.3, lw=0.4)
+        ax.legend(fontsize=6, loc="upper right")
+    fig.suptitle(f"Spectral kurtosis of {channel} (stored)", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, out, dpi)
+
+
+def order_map(ds, series, case, segment_time=0.2, max_order=None):
+    """(rpm of each segment, orders, amplitudes [segment, order]) of a stored `series` of
+    `case` over the analysed window: short-time spectra (`diagnosis.stft`, segments of
+    about `segment_time` s every quarter segment, at the series' stored rate) of the
+    squared envelope of the band the file records (docs/model.md §7.4, mean removed),
+    or of the series itself where it records none; each segment's spectrum read at
+    orders 0 … `max_order` (default 2.2 × the BPFI order; 400 points) as frequencies
+    order × rpm/60 at the segment's mean crank speed (linear interpolation)."""
+    fs = series_rate(ds)
+    t, x = diagnosis.window_series(ds, series, case)
+    if f"{series}_envelope_band_low" in ds:
+        band = tuple(float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+        power = np.abs(diagnosis.analytic_signal(x, fs, *band)) ** 2
+        x = power - power.mean()
+    segment = 1 << min(round(math.log2(segment_time * fs)), int(math.log2(max(len(x) // 4, 2))))
+    centres, freqs, amp = diagnosis.stft(x, fs, segment, segment // 4)
+    _, rpm = diagnosis.crank_motion(ds, case, centres + t[0])
+    top = max_order or 2.2 * diagnosis.fault_orders(ds, case).bpfi
+    orders = np.linspace(0.0, top, 400)
+    return rpm, orders, np.array([np.interp(orders * r / 60, freqs, row) for r, row in zip(rpm, amp)])
+
+
+def rpm_order_map(ds, series, cases, out, segment_time=0.2, max_order=None, dpi=90):
+    """The rpm–order map of run-ups (or any varying speed): `order_map` of each
+    {label: case} as an image, crank speed (rpm) against order (cycles per crank
+    revolution), dB re the panel's largest. A fault line stays at its order while the
+    speed sweeps: the orders of FTF, BPFO, BPFI and 2·BSF are dashed."""
+    _need(ds, series)
+    fig, axes = _panels(len(cases), width=5.2, height=3.4)
+    for ax, (label, case) in zip(axes, cases.items()):
+        rpm, orders, amp = order_map(ds, series, case, segment_time, max_order)
+        db = 20 * np.log10(np.maximum(amp, 1e-300) / amp[:, 1:].max())
+        mesh = ax.pcolormesh(orders, rpm, db, shading="nearest", cmap="magma", vmin=-40, vmax=0)
+        for line, order in diagnosis.fault_orders(ds, case).lines().items():
+            if line != "BSF" and order <= orders[-1]:
+                ax.axvline(order, color=LINE_COLOURS[line], ls="--", lw=1.0, label=f"{line} order {order:.3f}")
+        ax.set_xlim(0, orders[-1])
+        ax.set_xlabel("order (cycles per crank revolution)")
+        ax.set_ylabel("crank speed (rpm)")
+        what = "squared envelope" if f"{series}_envelope_band_low" in ds else "series"
+        ax.set_title(f"{label}: {what}, {rpm.min():.0f}–{rpm.max():.0f} rpm", fontsize=9)
+        ax.legend(fontsize=6, loc="upper right")
+        fig.colorbar(mesh, ax=ax, label="amplitude (dB re the panel's largest)")
+    fig.suptitle(f"rpm–order map of {series}", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, out, dpi)
+
+
 def kurtogram(ds, series, case, out, dpi=90):
     """The fast kurtogram (docs/model.md §7.6) of a stored `series` of `case`,
     recomputed over the analysed window at the series' stored rate (`series_rate`): the
@@ -376,7 +456,8 @@ def kurtogram(ds, series, case, out, dpi=90):
     ax.set_xlabel(f"frequency (Hz), series stored at {fs:g} Hz")
     ax.set_ylabel("level (bands of f_s / 2^(level+1))")
     case_id = int(ds["case"].values[case])
-    ax.set_title(f"Fast kurtogram of {series}, case {case_id} ({fault_label(ds, case)})", fontsize=10)
+    fault = f" ({fault_label(ds, case)})" if "fault" in ds else ""
+    ax.set_title(f"Fast kurtogram of {series}, case {case_id}{fault}", fontsize=10)
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(mesh, ax=ax, label="kurtosis of the complex envelope <|z|⁴>/<|z|²>² − 2")
     fig.tight_layout()
@@ -386,10 +467,17 @@ def kurtogram(ds, series, case, out, dpi=90):
 def indicator_heatmaps(ds, names, x, y, out, dpi=90):
     """Per-case indicators (e.g. bearing_force_kurtosis, docs/model.md §7.7) as
     heatmaps over two case labels, one panel and colour scale each. `x` and `y` are
-    (title, [label of each case]) of the columns and rows; a cell holds the one case
-    with that pair of labels (ValueError if several have it), blank where none does."""
-    (x_title, x_labels), (y_title, y_labels) = x, y
-    columns, rows = list(dict.fromkeys(x_labels)), list(dict.fromkeys(y_labels))
+    (title, [label of each case], [sort key of each case]) of the columns and rows,
+    ordered by their keys (e.g. speeds by value, not as the cases come); a cell holds
+    the one case with that pair of labels (ValueError if several have it), blank where
+    none does."""
+    (x_title, x_labels, x_keys), (y_title, y_labels, y_keys) = x, y
+
+    def ordered(labels, keys):
+        first = dict(zip(reversed(labels), reversed(keys)))  # each label's key at its first case
+        return sorted(dict.fromkeys(labels), key=lambda label: first[label])
+
+    columns, rows = ordered(x_labels, x_keys), ordered(y_labels, y_keys)
     cells = {}
     for case, key in enumerate(zip(x_labels, y_labels)):
         if key in cells:
