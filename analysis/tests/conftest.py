@@ -13,6 +13,7 @@ Environment:
 """
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -114,6 +115,22 @@ def smoke(smoke_path):
 def paper(paper_path):
     with open_study(paper_path) as ds:
         yield ds
+
+
+@pytest.fixture(scope="package")
+def installed(tmp_path_factory):
+    """The package installed from a copy of pyproject.toml and analysis/ (so the build
+    leaves nothing in the repository) into a target folder: (site folder, bin folder)."""
+    root = tmp_path_factory.mktemp("install")
+    source = root / "source"
+    shutil.copytree(REPO / "analysis", source / "analysis", ignore=shutil.ignore_patterns("tests", "__pycache__"))
+    shutil.copy(REPO / "pyproject.toml", source)
+    (source / "docs").mkdir()
+    shutil.copy(REPO / "docs" / "analysis.md", source / "docs")
+    site = root / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--no-index",
+                    "--target", str(site), str(source)], check=True, capture_output=True)
+    return site, site / "bin"
 
 
 def check_png(path, min_kb=15, min_pixels=300):

@@ -4,7 +4,6 @@ repository, and every script also runs as `python analysis/<name>.py`; the featu
 (analysis/features.py) has one row per case with every per-case value, to CSV and
 Parquet alike."""
 
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -28,22 +27,6 @@ def test_each_script_runs_by_its_path_from_anywhere(name, tmp_path):
                           cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("usage:")
-
-
-@pytest.fixture(scope="module")
-def installed(tmp_path_factory):
-    """The package installed from a copy of pyproject.toml and analysis/ (so the build
-    leaves nothing in the repository) into a target folder: (site folder, bin folder)."""
-    root = tmp_path_factory.mktemp("install")
-    source = root / "source"
-    shutil.copytree(REPO / "analysis", source / "analysis", ignore=shutil.ignore_patterns("tests", "__pycache__"))
-    shutil.copy(REPO / "pyproject.toml", source)
-    (source / "docs").mkdir()
-    shutil.copy(REPO / "docs" / "analysis.md", source / "docs")
-    site = root / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--no-index",
-                    "--target", str(site), str(source)], check=True, capture_output=True)
-    return site, site / "bin"
 
 
 @pytest.mark.parametrize("script", sorted(CONSOLE))
