@@ -122,9 +122,9 @@ def parameter_value(ds, name, case):
 def constant_rpm(ds, case):
     """The crank speed (rpm) of a constant-speed case, NaN for a speed that varies:
     `rpm`, or a ramp whose `speed_from` equals `speed_to`, or a sine of amplitude 0
-    (each runs as the constant drive, docs/model.md §1.5; the file stores `rpm` NaN for
-    every `speed:` profile). `ds` is the flat study (an xarray Dataset) and `case` a
-    position along `case`."""
+    (each runs as the constant drive, docs/model.md §1.5; studyrun stores their speed
+    as `rpm`, and files of earlier versions NaN). `ds` is the flat study (an xarray
+    Dataset) and `case` a position along `case`."""
     rpm = parameter_value(ds, "rpm", case)
     if math.isfinite(rpm):
         return rpm

@@ -26,6 +26,7 @@ mod ideal_mechanism;
 mod integrators;
 mod interop;
 mod isa;
+mod labelled_data;
 mod layering;
 mod orders;
 mod output_selection;

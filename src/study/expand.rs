@@ -90,6 +90,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         Some(list) => sensors::sensors(&ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
+    sensors::check_realizations(&ctx, &sensors, &cases)?;
     let analysed = (&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
     let envelope = file
