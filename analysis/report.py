@@ -170,21 +170,21 @@ def restrict(ds, selections):
 
 def no_defect(ds):
     """Boolean per case: the bearing has no defect. Its `fault` label is `none` where
-    the file has the label, else its `defect_depth` is 0 (a zero-depth defect is no
-    defect, docs/grid-file.md); without either variable, no case has a defect."""
+    the file has the label, else its `defect_depth` is 0 or NaN (a zero-depth defect is
+    no defect, docs/grid-file.md); without either variable, no case has a defect."""
     if "fault" in ds:
         return np.array([text(v) == dfig.HEALTHY for v in ds["fault"].values], dtype=bool)
     if "defect_depth" in ds:
-        return ds["defect_depth"].values == 0
+        depth = ds["defect_depth"].values
+        return (depth == 0) | np.isnan(depth)
     return np.ones(ds.sizes["case"], dtype=bool)
 
 
 def mark_healthy(ds):
     """`ds` with the defect parameters of the cases without a defect (`no_defect`)
-    marked not applicable: `defect_race` `none`, the numeric ones NaN (shown as n/a).
-    A grid with a defect axis gives its healthy cases (e.g. `cases:` with
-    `defect_depth: 0`) the race, angle and width of a zero-depth defect, which
-    describe nothing."""
+    marked not applicable: `defect_race` `none`, the numeric ones NaN (shown as n/a),
+    as studyrun stores them; a file that gives its healthy cases the race, angle and
+    width of a zero-depth defect (which describe nothing) is shown the same way."""
     healthy = no_defect(ds)
     if not healthy.any():
         return ds

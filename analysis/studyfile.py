@@ -123,8 +123,8 @@ def constant_rpm(ds, case):
     """The crank speed (rpm) of a constant-speed case, NaN for a speed that varies:
     `rpm`, or a ramp whose `speed_from` equals `speed_to`, or a sine of amplitude 0
     (each runs as the constant drive, docs/model.md §1.5; studyrun stores their speed
-    as `rpm`, and files of earlier versions NaN). `ds` is the flat study (an xarray
-    Dataset) and `case` a position along `case`."""
+    as `rpm`, a file with `rpm` NaN there is read the same). `ds` is the flat study (an
+    xarray Dataset) and `case` a position along `case`."""
     rpm = parameter_value(ds, "rpm", case)
     if math.isfinite(rpm):
         return rpm
