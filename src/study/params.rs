@@ -150,8 +150,8 @@ fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
     first_defect(c).map_or(f64::NAN, f)
 }
 
-/// The race of the case's first defect ([`first_defect`]), `none` for a healthy
-/// bearing: what files store as `defect_race`.
+/// The race of the case's first defect when its bearing has a defect of nonzero
+/// depth, `none` for a healthy bearing: what files store as `defect_race`.
 pub fn defect_race_name(c: &CaseParams) -> &'static str {
     first_defect(c).map_or("none", |d| d.race.name())
 }
