@@ -13,7 +13,9 @@ N < L), starting at samples 0, H, 2H, … of the series: by default of its analy
 window (transient ≤ t < duration, the samples the file's metrics use). Cases are
 assigned to splits whole, so no case is in two splits: the case ids (the file's `case`
 coordinate, so a merged file and its shards split alike) are shuffled by a generator
-seeded with `seed`, then cut at the fractions. Only `ok` cases are used.
+seeded with `seed`, then cut at the fractions; with `stratify="fault"` each fault class
+is cut on its own, so that every class is in every split when it has a case for each.
+Only `ok` cases are used.
 
 Windows are cut from the series as stored: a file whose grid has `output.decimate: k`
 stores every k-th sample (rate `series_sample_rate`), so L and H count stored samples.
@@ -23,6 +25,8 @@ says so.
 PyTorch is imported only by `torch_dataset`, never on import of this module, and is
 not a requirement of the analysis package.
 """
+
+import warnings
 
 import numpy as np
 
@@ -50,21 +54,76 @@ def windows(series, length, hop):
     return view[..., : (count - 1) * hop + 1 : hop, :]
 
 
+def _check_fractions(fractions):
+    """The three split fractions as floats; ValueError unless non-negative and summing to 1."""
+    fractions = tuple(float(f) for f in fractions)
+    if len(fractions) != 3 or min(fractions) < 0 or abs(sum(fractions) - 1) > 1e-9:
+        raise ValueError(f"fractions {fractions}: expected three non-negative numbers (train, validation, test) "
+                         "summing to 1")
+    return fractions
+
+
 def split_cases(case_ids, fractions=(0.7, 0.15, 0.15), seed=0):
     """{split: sorted case ids}: the distinct `case_ids` shuffled by
     `numpy.random.default_rng(seed)` (from sorted order, so the file's order does not
     matter) and cut into train, validation and test of round(fraction × cases) cases
     (test takes the rest). `fractions` are three non-negative numbers summing to 1."""
-    fractions = tuple(float(f) for f in fractions)
-    if len(fractions) != 3 or min(fractions) < 0 or abs(sum(fractions) - 1) > 1e-9:
-        raise ValueError(f"fractions {fractions}: expected three non-negative numbers (train, validation, test) "
-                         "summing to 1")
+    fractions = _check_fractions(fractions)
     ids = np.unique(np.asarray(case_ids))
     shuffled = np.random.default_rng(seed).permutation(ids)
     n_train = round(fractions[0] * ids.size)
     n_val = min(round(fractions[1] * ids.size), ids.size - n_train)
     cuts = np.split(shuffled, [n_train, n_train + n_val])
     return {name: np.sort(part) for name, part in zip(SPLITS, cuts)}
+
+
+class StratifyWarning(UserWarning):
+    """A class of the stratifying label has too few cases to be in every split."""
+
+
+def stratified_counts(count, fractions):
+    """How many of a class's `count` cases go to train, validation and test: one to each
+    split of positive fraction while the count lasts (in that order), then each further
+    case to the split furthest below its share fraction × count (the earlier on a tie),
+    so that every class is in every split that has a share whenever it has a case for
+    each."""
+    target = np.asarray(fractions, dtype=float) * count
+    counts = np.zeros(3, dtype=int)
+    counts[np.flatnonzero(target > 0)[:count]] = 1
+    for _ in range(count - counts.sum()):
+        counts[int(np.argmax(target - counts))] += 1
+    return counts
+
+
+def stratified_split(case_ids, classes, fractions=(0.7, 0.15, 0.15), seed=0):
+    """{split: sorted case ids} with each class of `classes` (one value per case id,
+    e.g. the `fault` label) split on its own: its ids shuffled by one
+    `numpy.random.default_rng(seed)` (classes in sorted order, each from sorted ids) and
+    cut at `stratified_counts`, so that every class is in every split of positive
+    fraction when it has a case for each. A class with fewer cases than that is put in
+    the first splits and a StratifyWarning names it, its count and the splits it misses."""
+    fractions = _check_fractions(fractions)
+    ids = np.asarray(case_ids)
+    classes = np.asarray(classes)
+    if ids.shape != classes.shape or np.unique(ids).size != ids.size:
+        raise ValueError(f"{ids.size} case ids (each once) need one class each, got {classes.size}")
+    rng = np.random.default_rng(seed)
+    parts = {name: [] for name in SPLITS}
+    short = []
+    for value in np.unique(classes):
+        members = rng.permutation(np.sort(ids[classes == value]))
+        counts = stratified_counts(members.size, fractions)
+        for name, chunk in zip(SPLITS, np.split(members, np.cumsum(counts)[:2])):
+            parts[name].append(chunk)
+        missing = [name for name, f, c in zip(SPLITS, fractions, counts) if f > 0 and c == 0]
+        if missing:
+            short.append(f"{value!s} has {members.size} case{'s' if members.size != 1 else ''}, "
+                         f"none in {' or '.join(missing)}")
+    if short:
+        need = int((np.asarray(fractions) > 0).sum())
+        warnings.warn(f"stratified split: every class needs {need} cases to be in every split; "
+                      + "; ".join(short), StratifyWarning, stacklevel=3)
+    return {name: np.sort(np.concatenate(chunks)).astype(ids.dtype) for name, chunks in parts.items()}
 
 
 class WindowSet:
@@ -111,7 +170,7 @@ def _default_parameters(ds):
 
 
 def make_splits(ds, channels, length, hop, labels=("location",), parameters=None,
-                fractions=(0.7, 0.15, 0.15), seed=0, analysed_only=True, dtype=np.float32):
+                fractions=(0.7, 0.15, 0.15), seed=0, analysed_only=True, dtype=np.float32, stratify=None):
     """{split: WindowSet} for "train", "validation" and "test" from the flat study `ds`.
 
     `channels`: series (`[case, time]` variables) stacked as the windows' channels;
@@ -119,6 +178,9 @@ def make_splits(ds, channels, length, hop, labels=("location",), parameters=None
     carried with each window (e.g. location, any parameter, a fault label); `parameters`:
     numeric per-case variables as the `parameters` array (default: every numeric
     parameter of the file); `fractions`, `seed`: the split (`split_cases`);
+    `stratify`: a per-case variable (e.g. "fault") whose every value is put in every
+    split when it has enough cases (`stratified_split`, which warns naming a class that
+    has not);
     `analysed_only`: window the analysed window (transient ≤ t < duration) rather than
     the whole series; `dtype`: of `x`.
 
@@ -160,7 +222,12 @@ def make_splits(ds, channels, length, hop, labels=("location",), parameters=None
     position = {int(i): k for k, i in enumerate(ids)}
 
     out = {}
-    for name, cases in split_cases(ids, fractions, seed).items():
+    if stratify is None:
+        assignment = split_cases(ids, fractions, seed)
+    else:
+        _per_case(ds, [stratify], "stratify")
+        assignment = stratified_split(ids, np.array([str(v) for v in sub[stratify].values]), fractions, seed)
+    for name, cases in assignment.items():
         rows = np.array([position[int(c)] for c in cases], dtype=int)
         # [cases, channels, windows, L] -> [cases, windows, channels, L] -> [cases * windows, channels, L]
         x = windows(series[rows], length, hop).transpose(0, 2, 1, 3).reshape(-1, len(channels), length)

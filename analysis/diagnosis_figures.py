@@ -1,13 +1,17 @@
 """Diagnosis figures of a study file (matplotlib, Agg backend): the journal centre's
 orbit, envelope spectra with the bearing's fault lines and shaft sidebands, a
-spectrogram, a waterfall of envelope spectra over the crank speed, order spectra,
-the fast kurtogram and heatmaps of condition indicators. Each function writes one
+spectrogram, a waterfall of envelope spectra over the crank speed, order spectra, an
+rpm–order map of a run-up, the stored spectral kurtosis, the fast kurtogram and
+heatmaps of condition indicators. Each function writes one
 PNG and returns its path; it raises ValueError when the study lacks what it needs.
 
 `ds` is the flat study Dataset of `studyfile.open_study`; `cases` are positions
 along its `case` dimension, given as {panel label: case} (one panel each, at most
 MAX_PANELS) or for the orbit as {panel title: {curve label: case}}. The computations
-are those of analysis/diagnosis.py (docs/model.md §7.3–§7.7).
+are those of analysis/diagnosis.py (docs/model.md §7.3–§7.7); what is recomputed from
+a stored series uses the series' own rate, `studyfile.series_rate` (sample_rate /
+decimate in a file of `output.decimate`), while the stored spectra and bands are of
+the full-rate series.
 """
 
 import math
@@ -18,6 +22,7 @@ from matplotlib.patches import Rectangle
 
 from analysis import diagnosis
 from analysis.figures import _heatmap, _norm, _save, plt, unit_text
+from analysis.studyfile import series_rate
 
 MAX_PANELS = 6
 """Panels per figure."""
@@ -112,7 +117,7 @@ def case_envelope(ds, channel, case):
         band = tuple(float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
         return ds["frequency"].values, ds[name].values[case], band, True
     _need(ds, channel)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     _, x = diagnosis.window_series(ds, channel, case)
     band = diagnosis.kurtogram(x, fs).band
     freq, amplitude = diagnosis.envelope_spectrum(x, fs, *band)
@@ -161,34 +166,63 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
     return _save(fig, out, dpi)
 
 
+CONTENT_SHARE = 0.995
+"""The share of a series' power a raw spectrogram's frequency axis holds (`content_top`)."""
+
+
+def content_top(series, sample_rate, share=CONTENT_SHARE):
+    """The frequency axis's top (Hz) for the raw spectra of `series` (a list of 1-D
+    sample arrays at `sample_rate`): the lowest frequency below which `share` of their
+    summed power (mean removed) lies, rounded up to 1, 2 or 5 × 10^k Hz, at most the
+    Nyquist frequency sample_rate/2."""
+    nyquist = 0.5 * sample_rate
+    n = min(len(x) for x in series)
+    power = sum(np.abs(np.fft.rfft(np.asarray(x[:n], dtype=float) - np.mean(x[:n]))) ** 2 for x in series)
+    cumulative = np.cumsum(power)
+    if cumulative[-1] <= 0:
+        return nyquist
+    freqs = np.fft.rfftfreq(n, 1.0 / sample_rate)
+    edge = float(freqs[min(np.searchsorted(cumulative, share * cumulative[-1]) + 1, freqs.size - 1)])
+    scale = 10.0 ** math.floor(math.log10(max(edge, 1e-300)))
+    nice = next(m * scale for m in (1, 2, 5, 10) if m * scale >= edge)
+    return min(nyquist, nice)
+
+
 def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=None, dpi=90):
     """STFT of a stored `series` over the analysed window, one panel per
     {label: case}: amplitude (file convention, dB re its largest) against time and
     frequency, segments of `segment` samples (default about 0.1 s, at most a quarter of
-    the window) every segment/4.
+    the window) every segment/4, at the stored series' rate (`series_rate`: a decimated
+    file's series run over the whole duration at sample_rate / decimate).
     With `demodulate` (and a band stored for the case, `<series>_envelope_band_low/
     _high`) the STFT is that of the squared envelope of the band (docs/model.md §7.4,
     mean removed) up to `f_max` (default 2.2 × the fastest BPFI): the fault lines, which
     follow the crank speed, are dashed (1× and 2× of the panel's line: BPFO, BPFI or
-    2·BSF; for `none` BPFO). Else the raw series up to `f_max` (default f_s/2)."""
+    2·BSF; for any other label BPFO). Else the raw series up to `f_max` (default
+    `content_top`: where 99.5 % of the panels' power lies, at most f_s/2)."""
     _need(ds, series)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     if segment is None:
         n = int(diagnosis.analysis_window(ds).sum())
         segment = 1 << min(round(math.log2(0.1 * fs)), int(math.log2(max(n // 4, 2))))
     demodulate = demodulate and f"{series}_envelope_band_low" in ds
-    fig, axes = _panels(len(cases), width=5.2, height=3.2)
-    for ax, (label, case) in zip(axes, cases.items()):
+    panels = {}
+    for label, case in cases.items():
         t, x = diagnosis.window_series(ds, series, case)
+        band = None
         if demodulate:
-            low, high = (float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
-            power = np.abs(diagnosis.analytic_signal(x, fs, low, high)) ** 2
+            band = tuple(float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+            power = np.abs(diagnosis.analytic_signal(x, fs, *band)) ** 2
             x = power - power.mean()
+        panels[label] = (case, t, x, band)
+    raw_top = f_max or (None if demodulate else content_top([x for _, _, x, _ in panels.values()], fs))
+    fig, axes = _panels(len(cases), width=5.2, height=3.2)
+    for ax, (label, (case, t, x, band)) in zip(axes, panels.items()):
         centres, freqs, amp = diagnosis.stft(x, fs, segment, segment // 4)
         centres = centres + t[0]
         _, rpm = diagnosis.crank_motion(ds, case, centres)
         lines = diagnosis.fault_orders(ds, case).lines()
-        top = f_max or (2.2 * lines["BPFI"] * rpm.max() / 60 if demodulate else 0.5 * fs)
+        top = raw_top or 2.2 * lines["BPFI"] * rpm.max() / 60
         keep = (freqs > 0) & (freqs <= top)
         db = 20 * np.log10(np.maximum(amp[:, keep].T, 1e-300) / amp[:, keep].max())
         mesh = ax.pcolormesh(centres, freqs[keep], db, shading="nearest", cmap="magma", vmin=-40, vmax=0)
@@ -198,10 +232,11 @@ def spectrogram(ds, series, cases, out, demodulate=True, f_max=None, segment=Non
                 ax.plot(centres, k * lines[own] * rpm / 60, ls=style, color="cyan", lw=1.0,
                         label=f"{k}× {own} (order {k * lines[own]:.3g})")
             ax.legend(fontsize=7, loc="upper left")
-            what = f"squared envelope of {low:g}–{high:g} Hz"
+            what = f"squared envelope of {band[0]:g}–{band[1]:g} Hz"
         else:
             what = "raw series"
         ax.set_ylim(0, top)
+        ax.set_xlim(t[0], t[-1])
         ax.set_xlabel("time (s)")
         ax.set_ylabel("frequency (Hz)")
         ax.set_title(f"{label}: {what}, {segment / fs:.3g} s segments", fontsize=9)
@@ -219,7 +254,7 @@ def _envelope_rows(ds, channel, case, segment_time):
     rpm = diagnosis.constant_rpm(ds, case)
     if math.isfinite(rpm):
         return [(rpm, ds["frequency"].values, ds[f"{channel}_envelope_spectrum"].values[case])]
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     low, high = (float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
     t, x = diagnosis.window_series(ds, channel, case)
     length = int(round(segment_time * fs))
@@ -248,7 +283,8 @@ def waterfall(ds, channel, cases, out, f_max=None, segment_time=0.2, dpi=90):
         gap = np.ptp(speeds) / (len(rows) - 1) if np.ptp(speeds) > 0 else 100.0
         for rpm, f, a in rows:
             keep = (f > 0) & (f <= top)
-            height = rpm + 2.5 * gap * a[keep] / a[keep].max()
+            largest = a[keep].max() or 1.0  # a band above a decimated series' Nyquist holds nothing
+            height = rpm + 2.5 * gap * a[keep] / largest
             ax.fill_between(f[keep], rpm, height, color="white", zorder=-rpm)
             ax.plot(f[keep], height, color="k", lw=0.6, zorder=-rpm)
         span = np.array([speeds.min() - gap, speeds.max() + 3 * gap])
@@ -275,7 +311,7 @@ def _order_rows(ds, channel, case):
         return ds["order"].values, ds[name].values[case], True
     t, x = diagnosis.window_series(ds, channel, case)
     theta, rpm = diagnosis.crank_motion(ds, case, t)
-    per_revolution = 2 * int(float(ds.attrs["sample_rate"]) * 60 / rpm.max() / 2)
+    per_revolution = 2 * int(series_rate(ds) * 60 / rpm.max() / 2)
     orders, amplitude = diagnosis.order_spectrum(x, theta, per_revolution)
     return orders, amplitude, False
 
@@ -307,14 +343,93 @@ def order_spectra(ds, channel, cases, out, max_order=None, dpi=90):
     return _save(fig, out, dpi)
 
 
+def spectral_kurtosis(ds, channel, cases, out, f_max=None, dpi=90):
+    """The stored spectral kurtosis `<channel>_spectral_kurtosis` (docs/model.md §7.5,
+    dimensionless, 0 for Gaussian noise) against frequency, one panel per
+    {label: case}, up to `f_max` (Hz; default the end of the file's frequency axis),
+    with the band the file records for the case (`<channel>_envelope_band_low/_high`)
+    shaded: where the impacts ring, the kurtosis stands out."""
+    name = f"{channel}_spectral_kurtosis"
+    _need(ds, name, f"{channel}_envelope_band_low")
+    freq = ds["frequency"].values
+    top = f_max or float(freq[-1])
+    keep = (freq >= 0) & (freq <= top)
+    fig, axes = _panels(len(cases))
+    for ax, (label, case) in zip(axes, cases.items()):
+        sk = np.asarray(ds[name].values[case], dtype=float)
+        low, high = (float(ds[f"{channel}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+        ax.axvspan(low, high, color="tab:cyan", alpha=0.3, lw=0, label=f"band in the file: {low:g}–{high:g} Hz")
+        ax.plot(freq[keep], sk[keep], color="k", lw=0.7, label=label)
+        ax.axhline(0.0, color="0.5", lw=0.6, ls="--", label="Gaussian noise: 0")
+        peak = int(np.nanargmax(np.where(keep, sk, np.nan)))
+        ax.set_title(f"{label}: largest {sk[peak]:.3g} at {freq[peak]:.0f} Hz", fontsize=9)
+        ax.set_xlim(0, top)
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("spectral kurtosis")
+        ax.grid(alpha=0.3, lw=0.4)
+        ax.legend(fontsize=6, loc="upper right")
+    fig.suptitle(f"Spectral kurtosis of {channel} (stored)", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, out, dpi)
+
+
+def order_map(ds, series, case, segment_time=0.2, max_order=None):
+    """(rpm of each segment, orders, amplitudes [segment, order]) of a stored `series` of
+    `case` over the analysed window: short-time spectra (`diagnosis.stft`, segments of
+    about `segment_time` s every quarter segment, at the series' stored rate) of the
+    squared envelope of the band the file records (docs/model.md §7.4, mean removed),
+    or of the series itself where it records none; each segment's spectrum read at
+    orders 0 … `max_order` (default 2.2 × the BPFI order; 400 points) as frequencies
+    order × rpm/60 at the segment's mean crank speed (linear interpolation)."""
+    fs = series_rate(ds)
+    t, x = diagnosis.window_series(ds, series, case)
+    if f"{series}_envelope_band_low" in ds:
+        band = tuple(float(ds[f"{series}_envelope_band_{e}"].values[case]) for e in ("low", "high"))
+        power = np.abs(diagnosis.analytic_signal(x, fs, *band)) ** 2
+        x = power - power.mean()
+    segment = 1 << min(round(math.log2(segment_time * fs)), int(math.log2(max(len(x) // 4, 2))))
+    centres, freqs, amp = diagnosis.stft(x, fs, segment, segment // 4)
+    _, rpm = diagnosis.crank_motion(ds, case, centres + t[0])
+    top = max_order or 2.2 * diagnosis.fault_orders(ds, case).bpfi
+    orders = np.linspace(0.0, top, 400)
+    return rpm, orders, np.array([np.interp(orders * r / 60, freqs, row) for r, row in zip(rpm, amp)])
+
+
+def rpm_order_map(ds, series, cases, out, segment_time=0.2, max_order=None, dpi=90):
+    """The rpm–order map of run-ups (or any varying speed): `order_map` of each
+    {label: case} as an image, crank speed (rpm) against order (cycles per crank
+    revolution), dB re the panel's largest. A fault line stays at its order while the
+    speed sweeps: the orders of FTF, BPFO, BPFI and 2·BSF are dashed."""
+    _need(ds, series)
+    fig, axes = _panels(len(cases), width=5.2, height=3.4)
+    for ax, (label, case) in zip(axes, cases.items()):
+        rpm, orders, amp = order_map(ds, series, case, segment_time, max_order)
+        db = 20 * np.log10(np.maximum(amp, 1e-300) / amp[:, 1:].max())
+        mesh = ax.pcolormesh(orders, rpm, db, shading="nearest", cmap="magma", vmin=-40, vmax=0)
+        for line, order in diagnosis.fault_orders(ds, case).lines().items():
+            if line != "BSF" and order <= orders[-1]:
+                ax.axvline(order, color=LINE_COLOURS[line], ls="--", lw=1.0, label=f"{line} order {order:.3f}")
+        ax.set_xlim(0, orders[-1])
+        ax.set_xlabel("order (cycles per crank revolution)")
+        ax.set_ylabel("crank speed (rpm)")
+        what = "squared envelope" if f"{series}_envelope_band_low" in ds else "series"
+        ax.set_title(f"{label}: {what}, {rpm.min():.0f}–{rpm.max():.0f} rpm", fontsize=9)
+        ax.legend(fontsize=6, loc="upper right")
+        fig.colorbar(mesh, ax=ax, label="amplitude (dB re the panel's largest)")
+    fig.suptitle(f"rpm–order map of {series}", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, out, dpi)
+
+
 def kurtogram(ds, series, case, out, dpi=90):
     """The fast kurtogram (docs/model.md §7.6) of a stored `series` of `case`,
-    recomputed over the analysed window: the kurtosis of each band's complex envelope
-    as an image, level against frequency. The band of largest kurtosis is outlined
+    recomputed over the analysed window at the series' stored rate (`series_rate`): the
+    kurtosis of each band's complex envelope as an image, level against frequency up to
+    that rate's Nyquist frequency. The band of largest kurtosis is outlined
     (white), and the band the file records for the case, if it does
     (`<series>_envelope_band_low/_high`), dashed (cyan)."""
     _need(ds, series)
-    fs = float(ds.attrs["sample_rate"])
+    fs = series_rate(ds)
     _, x = diagnosis.window_series(ds, series, case)
     result = diagnosis.kurtogram(x, fs)
     nyquist = 0.5 * fs
@@ -337,10 +452,12 @@ def kurtogram(ds, series, case, out, dpi=90):
                                ls="--", lw=1.5, label=f"band in the file: {s_low:g}–{s_high:g} Hz"))
     ax.set_yticks(range(len(levels)), [f"{level:.1f}" for level in levels])
     ax.set_ylim(len(levels) - 0.5, -0.5)
-    ax.set_xlabel("frequency (Hz)")
+    ax.set_xlim(0.0, nyquist)
+    ax.set_xlabel(f"frequency (Hz), series stored at {fs:g} Hz")
     ax.set_ylabel("level (bands of f_s / 2^(level+1))")
     case_id = int(ds["case"].values[case])
-    ax.set_title(f"Fast kurtogram of {series}, case {case_id} ({fault_label(ds, case)})", fontsize=10)
+    fault = f" ({fault_label(ds, case)})" if "fault" in ds else ""
+    ax.set_title(f"Fast kurtogram of {series}, case {case_id}{fault}", fontsize=10)
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(mesh, ax=ax, label="kurtosis of the complex envelope <|z|⁴>/<|z|²>² − 2")
     fig.tight_layout()
@@ -350,10 +467,17 @@ def kurtogram(ds, series, case, out, dpi=90):
 def indicator_heatmaps(ds, names, x, y, out, dpi=90):
     """Per-case indicators (e.g. bearing_force_kurtosis, docs/model.md §7.7) as
     heatmaps over two case labels, one panel and colour scale each. `x` and `y` are
-    (title, [label of each case]) of the columns and rows; a cell holds the one case
-    with that pair of labels (ValueError if several have it), blank where none does."""
-    (x_title, x_labels), (y_title, y_labels) = x, y
-    columns, rows = list(dict.fromkeys(x_labels)), list(dict.fromkeys(y_labels))
+    (title, [label of each case], [sort key of each case]) of the columns and rows,
+    ordered by their keys (e.g. speeds by value, not as the cases come); a cell holds
+    the one case with that pair of labels (ValueError if several have it), blank where
+    none does."""
+    (x_title, x_labels, x_keys), (y_title, y_labels, y_keys) = x, y
+
+    def ordered(labels, keys):
+        first = dict(zip(reversed(labels), reversed(keys)))  # each label's key at its first case
+        return sorted(dict.fromkeys(labels), key=lambda label: first[label])
+
+    columns, rows = ordered(x_labels, x_keys), ordered(y_labels, y_keys)
     cells = {}
     for case, key in enumerate(zip(x_labels, y_labels)):
         if key in cells:

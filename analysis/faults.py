@@ -12,13 +12,18 @@ and the one-sided amplitude of the bearing force spectrum there (the largest of 
 bins within ±1 bin of each of the first three harmonics), beside the healthy bearing's
 at the same location. Prints a Markdown table and writes one figure of the spectra.
 
-    python -m analysis.faults faults.h5 --figure docs/img/faults_spectra.png
+    python analysis/faults.py faults.h5 --figure docs/img/faults_spectra.png
 """
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
-import matplotlib
+if __package__ in (None, ""):  # run as a script: make `analysis` importable
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

@@ -25,6 +25,7 @@ from analysis.studyfile import (  # noqa: E402
     number_units,
     reference_for,
     select_cases,
+    series_rate,
     spectrum_window,
     unstack,
 )
@@ -46,6 +47,19 @@ CHANNEL_TEXT = {
 UNIT_TEXT = {"m s-2": "m/s²", "m2 s-4": "(m/s²)²", "m4 s-8": "(m/s²)⁴", "N2": "N²", "N4": "N⁴",
              "N s m-1": "N s/m", "kg m2": "kg m²", "1": ""}
 PARAMETER_TEXT = {"ball_count": "N_b", "location": "bearing", "waviness_amplitude": "waviness", "rpm": "speed"}
+
+
+def channel_text(channel):
+    """How a figure names a series: CHANNEL_TEXT's words, else the series' own name."""
+    return CHANNEL_TEXT.get(channel, channel)
+
+
+def check_series(ds, channel):
+    """Raise ValueError unless `channel` is a `[case, time]` series of `ds`, naming the
+    ones it has."""
+    if channel not in ds or ds[channel].dims != ("case", "time"):
+        have = [str(n) for n in ds.data_vars if ds[n].dims == ("case", "time")]
+        raise ValueError(f"channel {channel!r} is not a series of the file; it has {', '.join(have) or 'none'}")
 
 
 def unit_text(ds, name):
@@ -149,14 +163,14 @@ def paper_panels(
     """Panels per ball count (up to 4, 2×2) of `channel` against time with the ideal
     mechanism overlaid: the layout of the paper's Figs. 11–34.
 
-    `channel`: slider_acceleration (m/s²), crank_moment (N m) or bearing_force (N;
-    the ideal curve is the |F| of the ideal joint at the bearing's location).
+    `channel`: a stored series; slider_acceleration (m/s²), crank_moment (N m) and
+    bearing_force (N; the ideal curve is the |F| of the ideal joint at the bearing's
+    location) with the ideal mechanism's, any other (e.g. a sensor's) alone.
     `window` = (t0, t1) in s, default one revolution after the transient;
     `waviness_amplitude` in m, `rpm` in rev/min; `select` fixes other parameters that
     vary in the study, e.g. {"clearance": 4e-5}. Returns the PNG's path.
     """
-    if channel not in PANEL_CHANNELS:
-        raise ValueError(f"channel {channel!r}: one of {PANEL_CHANNELS}")
+    check_series(ds, channel)
     params = {"location": location, "rpm": rpm, "waviness_amplitude": waviness_amplitude, **(select or {})}
     by_count = _cases_by_ball_count(ds, params, ball_counts)
     t0, t1 = window or default_window(ds, rpm)
@@ -166,24 +180,26 @@ def paper_panels(
         raise ValueError(f"no samples in the window ({t0}, {t1}) s")
     rows = list(by_count.values())
     series = ds[channel].isel(case=rows).values[:, keep]
-    ideal = reference_for(ds.isel(case=rows), [channel])[channel].values[:, keep]
+    ideal = (reference_for(ds.isel(case=rows), [channel])[channel].values[:, keep] if channel in PANEL_CHANNELS
+             else [None] * len(rows))
 
     fig, axes = _panel_grid(len(rows), figsize=(10, 6.6) if len(rows) > 2 else (10, 3.8))
     for ax, (n, row), y, y_ideal in zip(axes, by_count.items(), series, ideal):
         ax.plot(time[keep], y, lw=0.6, color="C0", label="with bearing")
-        ax.plot(time[keep], y_ideal, lw=1.1, ls="--", color="k", label="ideal mechanism")
+        if y_ideal is not None:
+            ax.plot(time[keep], y_ideal, lw=1.1, ls="--", color="k", label="ideal mechanism")
         ax.set_title(f"N_b = {n}", fontsize=10)
         ax.text(0.01, 0.98, _deviation_note(ds, channel, row), transform=ax.transAxes, va="top", fontsize=7.5,
                 bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
         ax.grid(alpha=0.3)
     for i, ax in enumerate(axes):
         if i % 2 == 0:
-            ax.set_ylabel(f"{CHANNEL_TEXT[channel]} ({unit_text(ds, channel)})")
+            ax.set_ylabel(f"{channel_text(channel)} ({unit_text(ds, channel)})")
         if i >= len(axes) - 2:
             ax.set_xlabel("time (s)")
             ax.xaxis.set_tick_params(labelbottom=True)
     axes[0].legend(loc="lower right", fontsize=8)
-    fig.suptitle(f"{CHANNEL_TEXT[channel]}: {describe(ds, params)}", fontsize=11)
+    fig.suptitle(f"{channel_text(channel)}: {describe(ds, params)}", fontsize=11)
     fig.tight_layout()
     return _save(fig, out, dpi)
 
@@ -218,10 +234,11 @@ def _default_fmax(marks, nyquist):
 
 def ideal_spectra(ds, rows, channel):
     """(frequencies in Hz, amplitudes [len(rows), frequency]) of the ideal mechanism's
-    `channel` for the cases at positions `rows`: its series over the analysed window
-    transformed with the file's spectrum window (`spectrum_window`), as studyrun
-    computes the stored `<channel>_spectrum` of a case."""
-    sample_rate = float(ds.attrs["sample_rate"])
+    `channel` for the cases at positions `rows`: its stored series over the analysed
+    window transformed with the file's spectrum window (`spectrum_window`), as studyrun
+    computes the stored `<channel>_spectrum` of a case. The series are at their stored
+    rate (`series_rate`): a decimated file's reach its Nyquist frequency only."""
+    sample_rate = series_rate(ds)
     window = spectrum_window(ds)
     series = reference_for(ds.isel(case=list(rows)), [channel])[channel].values[:, analysis_window(ds)]
     freq = np.fft.rfftfreq(series.shape[1], 1.0 / sample_rate)
@@ -233,7 +250,7 @@ def spectra(
 ):
     """Amplitude spectra of `channel` (stored `<channel>_spectrum`, transient ≤ t < duration,
     the file's window `spectrum_window`) per ball count, the ideal mechanism's spectrum
-    (the same window) in grey, and the
+    (the same window) in grey for the PANEL_CHANNELS, and the
     characteristic frequencies of docs/model.md §7.3 marked (see analysis.frequencies):
     cage f_c, ball pass N_b f_out and N_b f_in, and each wavy race's whirl (or N_o f_out,
     N_i f_in where the balls cancel it).
@@ -244,8 +261,8 @@ def spectra(
     highest marked frequency); amplitudes in the channel's units on a log scale.
     Other arguments as for `paper_panels`. Returns the PNG's path.
     """
-    if channel not in PANEL_CHANNELS or f"{channel}_spectrum" not in ds:
-        raise ValueError(f"no stored spectrum with an ideal counterpart for {channel!r}")
+    if f"{channel}_spectrum" not in ds:
+        raise ValueError(f"no stored spectrum of {channel!r} (the grid's `spectra.channels`)")
     params = {"location": location, "rpm": rpm, "waviness_amplitude": waviness_amplitude, **(select or {})}
     by_count = _cases_by_ball_count(ds, params, ball_counts)
     rows = list(by_count.values())
@@ -255,14 +272,18 @@ def spectra(
     freq = ds["frequency"].values
     shown = (freq > 0) & (freq <= fmax)
     amplitudes = ds[f"{channel}_spectrum"].isel(case=rows).values[:, shown]
-    f_ideal, ideal = ideal_spectra(ds, rows, channel)
+    if channel in PANEL_CHANNELS:
+        f_ideal, ideal = ideal_spectra(ds, rows, channel)
+    else:
+        f_ideal, ideal = np.zeros(0), [np.zeros(0)] * len(rows)
     ideal_shown = (f_ideal > 0) & (f_ideal <= fmax)
 
     fig, axes = plt.subplots(len(rows), 1, sharex=True, sharey=True, squeeze=False,
                              figsize=(10, 1.9 * len(rows) + 1.4))
     for ax, (n, row), amplitude, a_ideal in zip(axes[:, 0], by_count.items(), amplitudes, ideal):
         ax.loglog(freq[shown], amplitude, lw=0.9, color="C0", label=f"with bearing, N_b = {n}")
-        ax.loglog(f_ideal[ideal_shown], a_ideal[ideal_shown], lw=0.8, color="0.55", label="ideal mechanism")
+        if a_ideal.size:
+            ax.loglog(f_ideal[ideal_shown], a_ideal[ideal_shown], lw=0.8, color="0.55", label="ideal mechanism")
         for i, (label, f, style) in enumerate(marks[row]):
             if f <= fmax:
                 ax.axvline(f, color=f"C{i + 1}", ls=style, lw=1.1, label=f"{label} = {f:.1f} Hz")
@@ -276,7 +297,7 @@ def spectra(
     axes[0, 0].set_xlim(0.8 * min(lowest, freq[1]), fmax)
     axes[-1, 0].set_xlabel("frequency (Hz)")
     resolution = freq[1] - freq[0]
-    fig.suptitle(f"amplitude spectrum of {CHANNEL_TEXT[channel]} ({float(ds.attrs['transient']):g} s ≤ t < {float(ds.attrs['duration']):g} s, "
+    fig.suptitle(f"amplitude spectrum of {channel_text(channel)} ({float(ds.attrs['transient']):g} s ≤ t < {float(ds.attrs['duration']):g} s, "
                  f"resolution {resolution:.3g} Hz): {describe(ds, params)}", fontsize=10)
     if location == "crank_rod":
         fig.text(0.01, 0.005, CRANK_ROD_NOTE, fontsize=7.5, style="italic")
@@ -341,8 +362,10 @@ def metrics_view(ds, metric, x_axis, y_axis, out, select=None, dpi=90):
     metric's units) over grid axes, written to the PNG `out`: a heatmap over
     x_axis × y_axis, or with y_axis=None lines against x_axis, one per ball count (or per the first other
     axis). Remaining grid axes with several values become facets sharing one colour
-    scale (or y axis); `select` fixes some axes first, e.g. {"waviness_amplitude": 4e-6}.
-    Failed cases and combinations the study did not run are blank. Returns the PNG's path.
+    scale (or y axis), one per combination of their values that the study ran (zipped
+    axes give no facet to the combinations they skip); `select` fixes some axes first,
+    e.g. {"waviness_amplitude": 4e-6}. Failed cases and combinations the study did not
+    run are blank. Returns the PNG's path.
     """
     sub = ds.isel(case=select_cases(ds, **select)) if select else ds
     grid = unstack(sub)
@@ -358,7 +381,9 @@ def metrics_view(ds, metric, x_axis, y_axis, out, select=None, dpi=90):
     if y_axis is None and others:
         line_axis = "ball_count" if "ball_count" in others else others[0]
     facets = [d for d in others if d != line_axis]
-    combos = list(itertools.product(*(values[d].values for d in facets)))
+    ran = grid["case_id"].notnull().squeeze(fixed, drop=True)
+    combos = [combo for combo in itertools.product(*(values[d].values for d in facets))
+              if not facets or bool(ran.sel(dict(zip(facets, combo))).any())]
     if len(combos) > MAX_FACETS:
         raise ValueError(f"{len(combos)} facets over {facets}: fix some axes with select=")
     ncols = min(values.sizes[facets[-1]], 6) if facets else 1

@@ -56,6 +56,29 @@ INDICATORS = ("rms", "peak", "crest_factor", "kurtosis", "skewness", "impulse_fa
 GROUP_KEYS = ("location", "rpm", "waviness_amplitude")
 DEFECT_PARAMETERS = ("defect_race", "defect_angle", "defect_width", "defect_depth")
 """The first defect's parameters (docs/result-file.md): not applicable to a bearing without one."""
+NO_DEFECT = "no defect"
+"""The label of the cases in the diagnosis figures of a study without any defect (its
+`fault` labels, all `none`, would tell nothing)."""
+
+
+class Skipped:
+    """One line of index.md: what is not shown for one reason (every figure skipped for
+    that reason, listed where the first was)."""
+
+    SHOWN = 3
+    """Names listed before the count of the rest."""
+
+    def __init__(self, reason, what):
+        self.reason = reason
+        self.whats = [what]
+
+    def __str__(self):
+        if len(self.whats) == 1:
+            return f"*{self.whats[0]}: not shown ({self.reason}).*"
+        listed = "; ".join(self.whats[: self.SHOWN])
+        rest = len(self.whats) - self.SHOWN
+        return (f"*{len(self.whats)} figures not shown ({self.reason}): {listed}"
+                + (f"; and {rest} more" if rest > 0 else "") + ".*")
 
 
 class Index:
@@ -63,6 +86,7 @@ class Index:
 
     def __init__(self, title):
         self.lines = [f"# {title}", ""]
+        self.skips = {}
 
     def section(self, heading):
         """Start a section."""
@@ -73,12 +97,25 @@ class Index:
         self.lines += [f"![{path.stem}]({path.name})", "", caption, ""]
 
     def note(self, text):
-        """A line of text, e.g. why something is not shown."""
+        """A line of text, e.g. what the study cannot show."""
         self.lines += [f"*{text}*", ""]
+
+    def skipped(self, what, reason):
+        """Say that `what` is not shown because of `reason`: one line per reason, naming
+        every figure it holds back."""
+        if reason in self.skips:
+            self.skips[reason].whats.append(what)
+        else:
+            self.skips[reason] = Skipped(reason, what)
+            self.lines += [self.skips[reason], ""]
+
+    def text(self):
+        """The text of index.md."""
+        return "\n".join(str(line) for line in self.lines)
 
     def write(self, path):
         """Write index.md to `path`."""
-        path.write_text("\n".join(self.lines), encoding="utf-8")
+        path.write_text(self.text(), encoding="utf-8")
 
 
 def _values_text(ds, name, cases=None):
@@ -133,21 +170,21 @@ def restrict(ds, selections):
 
 def no_defect(ds):
     """Boolean per case: the bearing has no defect. Its `fault` label is `none` where
-    the file has the label, else its `defect_depth` is 0 (a zero-depth defect is no
-    defect, docs/grid-file.md); without either variable, no case has a defect."""
+    the file has the label, else its `defect_depth` is 0 or NaN (a zero-depth defect is
+    no defect, docs/grid-file.md); without either variable, no case has a defect."""
     if "fault" in ds:
         return np.array([text(v) == dfig.HEALTHY for v in ds["fault"].values], dtype=bool)
     if "defect_depth" in ds:
-        return ds["defect_depth"].values == 0
+        depth = ds["defect_depth"].values
+        return (depth == 0) | np.isnan(depth)
     return np.ones(ds.sizes["case"], dtype=bool)
 
 
 def mark_healthy(ds):
     """`ds` with the defect parameters of the cases without a defect (`no_defect`)
-    marked not applicable: `defect_race` `none`, the numeric ones NaN (shown as n/a).
-    A grid with a defect axis gives its healthy cases (e.g. `cases:` with
-    `defect_depth: 0`) the race, angle and width of a zero-depth defect, which
-    describe nothing."""
+    marked not applicable: `defect_race` `none`, the numeric ones NaN (shown as n/a),
+    as studyrun stores them; a file that gives its healthy cases the race, angle and
+    width of a zero-depth defect (which describe nothing) is shown the same way."""
     healthy = no_defect(ds)
     if not healthy.any():
         return ds
@@ -308,7 +345,7 @@ def render_metrics(ds, cases, outdir, index, dpi):
             try:
                 figures.metrics_view(bearing, metric, x_axis, y_axis, out=out, dpi=dpi)
             except ValueError as e:
-                index.note(f"{metric}: not shown ({e}).")
+                index.skipped(metric, str(e))
                 continue
             index.figure(out, f"{metric} ({figures.unit_text(ds, metric)}) of the bearing cases {shape}, "
                               "transient ≤ t < duration; facets: the other grid axes; blank: failed or not run"
@@ -327,24 +364,26 @@ def render_group(ds, params, counts, outdir, index, channels, dpi):
         for channel in channels:
             t0, t1 = figures.default_window(ds, params["rpm"])
             if channel not in ds:
-                index.note(f"{channel}, {words}: not shown (the file does not store it: see `output.series`).")
+                index.skipped(f"{channel}, {words}", "the file does not store it: see `output.series`")
                 continue
             try:
                 out = figures.paper_panels(*args, channel, outdir / f"panels_{channel}_{name}.png",
                                            select=fixed, ball_counts=chunk, dpi=dpi)
-                index.figure(out, f"{figures.CHANNEL_TEXT[channel]} against time, t = {t0:g}–{t1:g} s, "
-                                  f"N_b = {balls} (ideal mechanism dashed): {words}.")
-                if int(ds.attrs.get("decimate", 1)) != 1:
-                    index.note(f"spectra of {channel}, {words}: not shown (the ideal mechanism's spectrum "
-                               "needs its full-rate series; the file stores every "
-                               f"{int(ds.attrs['decimate'])}th sample, `output.decimate`).")
+                ideal = " (ideal mechanism dashed)" if channel in figures.PANEL_CHANNELS else ""
+                index.figure(out, f"{figures.channel_text(channel)} against time, t = {t0:g}–{t1:g} s, "
+                                  f"N_b = {balls}{ideal}: {words}.")
+                if int(ds.attrs.get("decimate", 1)) != 1 and channel in figures.PANEL_CHANNELS:
+                    index.skipped(f"spectra of {channel}, {words}", "the ideal mechanism's spectrum needs its "
+                                  f"full-rate series; the file stores every {int(ds.attrs['decimate'])}th sample, "
+                                  "`output.decimate`")
                 elif f"{channel}_spectrum" in ds:
                     out = figures.spectra(*args, channel, outdir / f"spectrum_{channel}_{name}.png",
                                           select=fixed, ball_counts=chunk, dpi=dpi)
-                    index.figure(out, f"amplitude spectra of {figures.CHANNEL_TEXT[channel]}, N_b = {balls}, "
-                                      f"ideal mechanism grey, characteristic frequencies marked: {words}.")
+                    grey = ", ideal mechanism grey" if channel in figures.PANEL_CHANNELS else ""
+                    index.figure(out, f"amplitude spectra of {figures.channel_text(channel)}, N_b = {balls}{grey}, "
+                                      f"characteristic frequencies marked: {words}.")
             except ValueError as e:  # e.g. an ideal-mechanism series the file does not store
-                index.note(f"{channel}, {words}: not shown ({e}).")
+                index.skipped(f"{channel}, {words}", str(e))
 
 
 def render_series(ds, cases, outdir, index, channels, max_groups, dpi):
@@ -392,18 +431,59 @@ def speed_text(ds, case):
     return f"{profile} speed"
 
 
+def speed_key(ds, case):
+    """Sort key of a case's speed: constant speeds first, by rpm, then ramps by (from,
+    to), sines by (mean, amplitude), other profiles last."""
+    rpm = constant_rpm(ds, case)
+    if np.isfinite(rpm):
+        return (0, rpm, 0.0)
+    profile = text(ds["speed_profile"].values[case])
+    pairs = {"ramp": ("speed_from", "speed_to"), "sine": ("speed_mean", "speed_amplitude")}
+    if profile in pairs:
+        return (1 if profile == "ramp" else 2,) + tuple(float(ds[k].values[case]) for k in pairs[profile])
+    return (3, 0.0, 0.0)
+
+
+def value_keys(ds, axis, cases):
+    """Sort keys of the values of per-case variable `axis` at `cases`: numbers by value
+    (NaN, not applicable, last), text in order of first appearance among `cases`."""
+    values = ds[axis].values[cases]
+    if values.dtype.kind in "USO":
+        first = {v: k for k, v in enumerate(dict.fromkeys(text(v) for v in values))}
+        return [(0, first[text(v)]) for v in values]
+    return [(1, 0.0) if np.isnan(v) else (0, float(v)) for v in values.astype(float)]
+
+
+def axis_labels(ds, axis, cases):
+    """(title, [label], [sort key]) of grid axis `axis` at `cases`, for a heatmap axis: a
+    speed axis (SPEED_KEYS) shows each case's speed, a profile by its profile
+    (`speed_text`, e.g. 'run-up 300→900 rpm'), ordered by `speed_key`; another axis its
+    values with their unit, numbers in numeric order (`value_keys`)."""
+    if axis in SPEED_KEYS:
+        return "speed", [speed_text(ds, c) for c in cases], [speed_key(ds, c) for c in cases]
+    return (figures.PARAMETER_TEXT.get(axis, axis), [figures.value_text(ds, axis, v) for v in ds[axis].values[cases]],
+            value_keys(ds, axis, cases))
+
+
 def conditions(ds, cases):
     """{condition: {fault label: case}} of the successful bearing `cases`: a condition
     is the case's speed with the grid axes that vary among them (other than the
     speed's and the defect's race); the fault label is the `fault` variable. A case
     without a defect (`no_defect`) has no defect width, angle or depth: it joins every
-    condition that agrees with it on the other axes (one of its own if none does).
+    condition that agrees with it on the other axes (one of its own if none does). The
+    conditions are ordered by those axes' values (`value_keys`), then by speed
+    (`speed_key`). In a study without any defect among `cases` the label is NO_DEFECT.
     Returns also the count of cases left out because an earlier one had the same pair."""
     axes = [a for a in varying_axes(ds, cases) if a not in SPEED_KEYS + FAULT_KEYS]
     if "location" in ds and len(np.unique(ds["location"].values[cases])) > 1 and "location" not in axes:
         axes.insert(0, "location")
     defect_axes = [a for a in axes if a in DEFECT_PARAMETERS]
     healthy = no_defect(ds)
+    keys = {a: dict(zip(cases, value_keys(ds, a, cases))) for a in axes}
+    sort_key = {}
+
+    def label_of(case):
+        return dfig.fault_label(ds, case) if not healthy[cases].all() else NO_DEFECT
 
     def place(case, skip=()):
         return ", ".join([(f"{figures.PARAMETER_TEXT.get(a, a)} " if a != "location" else "")
@@ -417,8 +497,9 @@ def conditions(ds, cases):
             continue
         name = place(case)
         general.setdefault(name, place(case, defect_axes))
+        sort_key.setdefault(name, tuple(keys[a][case] for a in axes) + speed_key(ds, case))
         group = out.setdefault(name, {})
-        label = dfig.fault_label(ds, case)
+        label = label_of(case)
         if label in group:
             dropped += 1
         else:
@@ -427,13 +508,14 @@ def conditions(ds, cases):
         own = place(case, defect_axes)
         joined = False
         for name in [n for n, g in general.items() if g == own] or [own]:
+            sort_key.setdefault(name, tuple(keys[a][case] for a in axes) + speed_key(ds, case))
             group = out.setdefault(name, {})
-            label = dfig.fault_label(ds, case)
+            label = label_of(case)
             if label not in group:
                 group[label] = case
                 joined = True
         dropped += not joined
-    return out, dropped
+    return {name: out[name] for name in sorted(out, key=sort_key.get)}, dropped
 
 
 def envelope_channels(ds):
@@ -451,12 +533,14 @@ def _draw(index, what, draw, caption):
     try:
         index.figure(draw(), caption)
     except ValueError as e:
-        index.note(f"{what}: not shown ({e}).")
+        index.skipped(what, str(e))
 
 
 def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
     """The diagnosis figures (analysis/diagnosis_figures.py) of the bearing cases."""
     index.section("Diagnosis: orbit, envelope, time–frequency and order analysis, kurtogram, indicators")
+    index.lines += ["Which series: the first envelope channel whose series the file stores, else the first sensor "
+                    "series, else bearing_force.", ""]
     if cases.size == 0:
         index.note("No successful bearing case: no diagnosis figures.")
         return
@@ -469,7 +553,9 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
     constant = [n for n in names if all(np.isfinite(constant_rpm(ds, c)) for c in groups[n].values())]
     varying = [n for n in names if n not in constant]
     channels = envelope_channels(ds)
-    series = channels[0] if channels else "bearing_force"
+    sensors = sensor_series(ds)
+    with_series = [c for c in channels if c in ds]
+    series = (with_series or sensors or ["bearing_force"])[0]
 
     for start in range(0, len(names), dfig.MAX_PANELS):
         chunk = {n: groups[n] for n in names[start : start + dfig.MAX_PANELS]}
@@ -479,7 +565,6 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
 
     if not channels:
         index.note("The study has no `envelope:`: no envelope spectra, waterfall, kurtogram band or indicators.")
-    sensors = sensor_series(ds)
     for channel in channels + [s for s in sensors if s not in channels]:
         stored = channel in channels
         what = f"the sensor series {channel} (noise included)" if channel in sensors else channel
@@ -500,8 +585,10 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
         out = outdir / f"spectrogram_{series}_{slug_text(name)}.png"
         _draw(index, f"spectrogram, {name}", lambda: dfig.spectrogram(ds, series, groups[name], out, dpi=dpi),
               f"spectrogram of the squared envelope of {series} in its band at {name}, one panel per fault label; "
-              "dashed and dotted: 1× and 2× the panel's fault line following the crank speed." if channels else
-              f"spectrogram of {series} at {name}, 0 to f_s/2, one panel per fault label (dB re the panel's largest).")
+              "dashed and dotted: 1× and 2× the panel's fault line following the crank speed."
+              if f"{series}_envelope_band_low" in ds else
+              f"spectrogram of {series} at {name}, from 0 to where 99.5 % of its power lies, one panel per fault "
+              "label (dB re the panel's largest).")
     if not varying:
         index.note("No run-up or other varying speed: the spectrogram of the first condition only, no order spectra.")
 
@@ -527,13 +614,29 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
         _draw(index, f"order spectra, {name}", lambda: dfig.order_spectra(ds, series, groups[name], out, dpi=dpi),
               f"order spectra of {series} at {name} (amplitude against cycles per crank revolution), one panel "
               "per fault label; dashed: the orders of FTF, BPFO, BPFI, BSF, 2·BSF.")
+        out = outdir / f"rpm_orders_{series}_{slug_text(name)}.png"
+        _draw(index, f"rpm–order map, {name}", lambda: dfig.rpm_order_map(ds, series, groups[name], out, dpi=dpi),
+              f"rpm–order map of {series} at {name}: short-time spectra"
+              + (" of the squared envelope in its band" if f"{series}_envelope_band_low" in ds else "")
+              + " in 0.2 s segments, each read at orders of its mean crank speed (dB re the panel's largest), one "
+              "panel per fault label; dashed: the orders of FTF, BPFO, BPFI, 2·BSF, which stay put as the speed "
+              "sweeps.")
 
-    if channels and names:
-        first = names[0]
+    for channel in channels:
+        if constant or varying:
+            name = (constant or varying)[0]
+            out = outdir / f"spectral_kurtosis_{channel}_{slug_text(name)}.png"
+            _draw(index, f"spectral kurtosis of {channel}, {name}",
+                  lambda: dfig.spectral_kurtosis(ds, channel, groups[name], out, dpi=dpi),
+                  f"spectral kurtosis of {channel} as stored (docs/model.md §7.5) at {name}, one panel per fault "
+                  "label; shaded: the band the file records.")
+
+    if with_series and names:
+        first, channel = names[0], with_series[0]
         for label, case in groups[first].items():
-            out = outdir / f"kurtogram_{channels[0]}_{slug_text(first)}_{label}.png"
-            _draw(index, f"kurtogram, {first}, {label}", lambda: dfig.kurtogram(ds, channels[0], case, out, dpi=dpi),
-                  f"fast kurtogram of {channels[0]} recomputed from the series ({first}, fault {label}): "
+            out = outdir / f"kurtogram_{channel}_{slug_text(first)}_{slug_text(label)}.png"
+            _draw(index, f"kurtogram, {first}, {label}", lambda: dfig.kurtogram(ds, channel, case, out, dpi=dpi),
+                  f"fast kurtogram of {channel} recomputed from the series ({first}, {label}): "
                   "kurtosis per band and level; white: its largest, cyan dashed: the band the file records.")
 
     render_indicators(ds, cases, channels, outdir, index, dpi)
@@ -541,7 +644,8 @@ def render_diagnosis(ds, cases, outdir, index, max_groups, dpi):
 
 def render_indicators(ds, cases, channels, outdir, index, dpi):
     """Heatmaps of the condition indicators over two grid axes if they tell the cases
-    apart, else over fault label × condition."""
+    apart, else over fault label × condition; numbers in numeric order, speeds by
+    `axis_labels`."""
     if not channels:
         return
     sub = ds.isel(case=cases)
@@ -550,12 +654,14 @@ def render_indicators(ds, cases, channels, outdir, index, dpi):
     pairs = []
     if len(axes) >= 2:
         x_axis, y_axis = metric_axes(axes)
-        label = lambda a: [figures.value_text(sub, a, v) for v in sub[a].values]  # noqa: E731
-        pairs.append(((figures.PARAMETER_TEXT.get(x_axis, x_axis), label(x_axis)),
-                      (figures.PARAMETER_TEXT.get(y_axis, y_axis), label(y_axis))))
-    condition = {case: name for name, g in conditions(sub, all_cases)[0].items() for case in g.values()}
-    pairs.append((("fault", [dfig.fault_label(sub, c) for c in all_cases]),
-                  ("condition", [condition.get(c, "(repeated)") for c in all_cases])))
+        pairs.append((axis_labels(sub, x_axis, all_cases), axis_labels(sub, y_axis, all_cases)))
+    groups = conditions(sub, all_cases)[0]
+    condition = {case: name for name, g in groups.items() for case in g.values()}
+    rank = {name: k for k, name in enumerate(groups)}
+    faults = [dfig.fault_label(sub, c) for c in all_cases]
+    named = [condition.get(c, "(repeated)") for c in all_cases]
+    pairs.append((("fault", faults, list(all_cases)),  # fault labels as they first come
+                  ("condition", named, [rank.get(n, len(rank)) for n in named])))
     for channel in channels:
         names = [f"{channel}_{i}" for i in INDICATORS if f"{channel}_{i}" in ds]
         out = outdir / f"indicators_{channel}.png"
@@ -569,7 +675,7 @@ def render_indicators(ds, cases, channels, outdir, index, dpi):
                                "one colour scale a panel; blank: no such case or failed.")
             break
         else:
-            index.note(f"indicators of {channel}: not shown ({reason}).")
+            index.skipped(f"indicators of {channel}", str(reason))
 
 
 def slug_text(text):
@@ -594,12 +700,26 @@ def summary(ds, cases):
     ]
 
 
+def check_channels(ds, channels):
+    """Raise ValueError unless each of `channels` is a `[case, time]` series of `ds` or
+    one of PANEL_CHANNELS (a panel channel the file does not store is said so in the
+    index), naming the series allowed."""
+    series = [str(n) for n in ds.data_vars if ds[n].dims == ("case", "time")]
+    allowed = list(dict.fromkeys(list(figures.PANEL_CHANNELS) + series))
+    bad = [c for c in channels if c not in allowed]
+    if bad:
+        raise ValueError(f"--channels {bad[0]}: not a series of the file; allowed: {', '.join(allowed)}")
+
+
 def report(study, outdir, channels=figures.PANEL_CHANNELS, max_groups=16, dpi=90, selections=()):
     """Render all figures of the study file `study` into `outdir` and write
-    `outdir/index.md`; returns the index's path."""
+    `outdir/index.md`; returns the index's path. `channels`: the series of the panels
+    and spectra, each a PANEL_CHANNELS entry (with the ideal mechanism's) or any other
+    series the file stores, e.g. a sensor's (alone)."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     with open_study(study) as full:
+        check_channels(full, channels)
         ds = with_constant_rpm(mark_healthy(restrict(full, selections)))
         cases = bearing_cases(ds)
         index = Index(f"Study `{ds.attrs.get('study_name', Path(study).stem)}`")
@@ -618,8 +738,10 @@ def main(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("study", help="study file written by studyrun (.h5)")
     parser.add_argument("outdir", help="directory for the PNGs and index.md (created if missing)")
-    parser.add_argument("--channels", nargs="+", choices=figures.PANEL_CHANNELS, default=list(figures.PANEL_CHANNELS),
-                        help="channels of the time-series panels and spectra (default: all three)")
+    parser.add_argument("--channels", nargs="+", default=list(figures.PANEL_CHANNELS),
+                        help="series of the time-series panels and spectra: slider_acceleration, crank_moment, "
+                             "bearing_force (with the ideal mechanism's; the default) or any other series the file "
+                             "stores, e.g. a sensor's")
     parser.add_argument("--select", action="append", default=[], metavar="NAME=VALUE",
                         help="only cases with this parameter value, in the file's units "
                              "(e.g. rpm=300, waviness_amplitude=4e-6, location=crank_rod); repeatable")

@@ -29,10 +29,13 @@ docs/result-file.md), what `study_saltelli` reads:
     that name, in the file's units) holding the case's design value;
   - the cases at one grid point, ordered by case id, are the rows of SALib's sample
     matrix in SALib's order: per base row A, then AB_1 … AB_D, then BA_1 … BA_D, then B.
-  A design repeated at every grid point is analysed one grid point at a time
-  (`--select` the point). `study_saltelli` checks the rows have the Saltelli
-  structure (AB_j equals A but in column j, where it equals B) before analysing, so a
-  file in another order is refused rather than misread.
+  A design repeated at every grid point (and explicit case) is analysed one grid point
+  at a time: the root attribute `design_rows` says how many cases one repetition
+  holds, case id // design_rows is its grid point (`design_points`), and the indices
+  are reported per point, named by the parameters that tell the points apart
+  (`--select` one point to analyse it alone). `study_saltelli` checks the rows have
+  the Saltelli structure (AB_j equals A but in column j, where it equals B) before
+  analysing, so a file in another order is refused rather than misread.
 
 Figures (matplotlib, Agg): one PNG per metric with the indices as bars and their
 intervals as error bars (`plot_indices`).
@@ -61,10 +64,12 @@ class Indices:
     `names`: the parameters; `first`, `total`: S_i and ST_i (dimensionless shares of the
     metric's variance); `first_conf`, `total_conf`: half-widths of their confidence
     intervals (NaN where exact); `conf_level`: the intervals' level (NaN where exact);
-    `method`: "grid" or "saltelli"; `samples`: model evaluations used.
+    `method`: "grid" or "saltelli"; `samples`: model evaluations used; `point`: the
+    grid point of a design repeated over grid axes, {parameter: value in the file's
+    units} ({} for a design run once, or the grid's indices).
     """
 
-    def __init__(self, names, first, total, first_conf, total_conf, conf_level, method, samples):
+    def __init__(self, names, first, total, first_conf, total_conf, conf_level, method, samples, point=None):
         self.names = list(names)
         self.first = np.asarray(first, dtype=float)
         self.total = np.asarray(total, dtype=float)
@@ -73,11 +78,18 @@ class Indices:
         self.conf_level = float(conf_level)
         self.method = method
         self.samples = int(samples)
+        self.point = dict(point or {})
+
+    def point_text(self):
+        """The grid point as 'name = value, …' ('' for none)."""
+        return ", ".join(f"{k} = {v if isinstance(v, str) else f'{v:g}'}" for k, v in self.point.items())
 
     def table(self, metric):
         """The indices as text lines, one parameter a line."""
         exact = self.method == "grid"
-        head = f"{metric}: {'exact, full grid' if exact else f'Saltelli design, {self.conf_level:.0%} intervals'}" \
+        where = f" at {self.point_text()}" if self.point else ""
+        head = f"{metric}{where}: " \
+               f"{'exact, full grid' if exact else f'Saltelli design, {self.conf_level:.0%} intervals'}" \
                f" ({self.samples} cases)"
         lines = [head, f"  {'parameter':<28}{'S1':>18}{'ST':>18}"]
         for k, name in enumerate(self.names):
@@ -207,10 +219,52 @@ def study_grid(ds, metric):
     return grid_indices(unstack(ds)[metric].load())
 
 
-def study_saltelli(ds, metric, resamples=1000, conf_level=0.95, seed=0):
+def design_points(ds):
+    """[(point, positions)] of the file's design repetitions, in case-id order: the
+    cases of each grid point (case id // `design_rows`; the whole file without that
+    attribute) as positions along `case`, and the point as {parameter: value} of the
+    per-case variables (grid axes and parameters, not the design's own) that are the
+    same within each repetition and differ between them ({} for a single one)."""
+    ids = ds["case"].values.astype(np.int64)
+    rows = int(ds.attrs.get("design_rows", 0)) or None
+    block = ids // rows if rows else np.zeros(ids.size, dtype=np.int64)
+    blocks = np.unique(block)
+    design = set(str(ds.attrs.get("design_parameters", "")).split(",")) | {"design_row"}
+    candidates = list(dict.fromkeys(grid_axes(ds) + [
+        str(v) for v in ds.data_vars if ds[v].attrs.get("studyrun_role") == "parameter"]))
+    naming = []
+    for name in candidates:
+        if name in design or name not in ds or ds[name].dims != ("case",):
+            continue
+        values = ds[name].values
+        keys = np.array([str(v) for v in values])  # NaN equal to NaN, as text
+        within = [set(keys[block == b]) for b in blocks]
+        if all(len(w) == 1 for w in within) and len(set.union(*within)) > 1:
+            naming.append((name, [values[block == b][0] for b in blocks]))
+    out = []
+    for k, b in enumerate(blocks):
+        point = {name: (str(v[k]) if isinstance(v[k], (str, bytes)) else float(v[k])) for name, v in naming}
+        out.append((point, np.flatnonzero(block == b)))
+    return out
+
+
+def study_saltelli_points(ds, metric, resamples=1000, conf_level=0.95, seed=0):
+    """`study_saltelli` at each grid point of a design repeated over grid axes
+    (`design_points`): [Indices], each with its `point`."""
+    out = []
+    for point, positions in design_points(ds):
+        indices = study_saltelli(ds.isel(case=positions), metric, resamples, conf_level, seed, whole=False)
+        indices.point = point
+        out.append(indices)
+    return out
+
+
+def study_saltelli(ds, metric, resamples=1000, conf_level=0.95, seed=0, whole=True):
     """`saltelli_indices` of the study's `metric` from the study's Saltelli design (the
     layout in this module's docstring): the parameters named by `design_parameters`,
-    their per-case values as the sample matrix and the cases in case-id order."""
+    their per-case values as the sample matrix and the cases in case-id order. With
+    `whole`, raises ValueError if the file repeats the design at several grid points
+    (use `study_saltelli_points`, or select one point first)."""
     if str(ds.attrs.get("design_method", "")) != "saltelli":
         raise ValueError("the file has no Saltelli design (root attribute design_method is not 'saltelli')")
     if metric not in ds:
@@ -219,6 +273,13 @@ def study_saltelli(ds, metric, resamples=1000, conf_level=0.95, seed=0):
     missing = [p for p in names if p not in ds]
     if not names or missing:
         raise ValueError(f"design_parameters {names} name no per-case variables {missing}")
+    if whole:
+        points = design_points(ds)
+        if len(points) > 1:
+            shown = "; ".join(", ".join(f"{k} = {v}" for k, v in p.items()) or "?" for p, _ in points[:4])
+            raise ValueError(f"the design is repeated at {len(points)} grid points ({shown}"
+                             f"{', ...' if len(points) > 4 else ''}): analyse each alone "
+                             "(study_saltelli_points, or select one point)")
     ds = ds.sortby("case")
     sample = np.column_stack([ds[p].values.astype(float) for p in names])
     second_order = bool(int(ds.attrs.get("design_second_order", 1)))
@@ -244,7 +305,8 @@ def plot_indices(indices, metric, out, dpi=90):
                 max(1.0, float(np.nanmax(indices.total + np.nan_to_num(indices.total_conf)))) + 0.05)
     ax.axhline(0, color="black", linewidth=0.6)
     how = "exact, full grid" if exact else f"Saltelli design, {indices.conf_level:.0%} bootstrap intervals"
-    ax.set_title(f"{metric}\n{how}; Σ S_i = {indices.first.sum():.3f}", fontsize=10)
+    where = f" at {indices.point_text()}" if indices.point else ""
+    ax.set_title(f"{metric}{where}\n{how}; Σ S_i = {indices.first.sum():.3f}", fontsize=10)
     ax.legend(fontsize=9)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
@@ -256,9 +318,12 @@ def plot_indices(indices, metric, out, dpi=90):
 
 def analyse(study, metrics, method="auto", outdir=None, selections=(), resamples=1000, conf_level=0.95,
             seed=0, dpi=90):
-    """Indices of each metric of the study file `study` ({metric: Indices}); with
-    `outdir`, one PNG per metric there (`sensitivity_<metric>.png`). `method`: "grid",
-    "saltelli", or "auto" (the Saltelli design if the file has one, else the grid)."""
+    """Indices of each metric of the study file `study` ({metric: [Indices]}: one per
+    grid point of a Saltelli design repeated over grid axes, each naming its `point`;
+    else one); with `outdir`, one PNG per metric and point there
+    (`sensitivity_<metric>.png`, or `sensitivity_<metric>_<k>.png` for point k of
+    several). `method`: "grid", "saltelli", or "auto" (the Saltelli design if the file
+    has one, else the grid)."""
     results = {}
     with open_study(study) as full:
         ds = restrict(full, selections)
@@ -268,14 +333,16 @@ def analyse(study, metrics, method="auto", outdir=None, selections=(), resamples
             raise ValueError("the study has no grid axes: no grid indices")
         for metric in metrics:
             if method == "grid":
-                results[metric] = study_grid(ds, metric)
+                results[metric] = [study_grid(ds, metric)]
             else:
-                results[metric] = study_saltelli(ds, metric, resamples, conf_level, seed)
+                results[metric] = study_saltelli_points(ds, metric, resamples, conf_level, seed)
     if outdir is not None:
         outdir = Path(outdir)
         outdir.mkdir(parents=True, exist_ok=True)
-        for metric, indices in results.items():
-            plot_indices(indices, metric, outdir / f"sensitivity_{metric}.png", dpi)
+        for metric, points in results.items():
+            for k, indices in enumerate(points):
+                name = f"sensitivity_{metric}.png" if len(points) == 1 else f"sensitivity_{metric}_{k}.png"
+                plot_indices(indices, metric, outdir / name, dpi)
     return results
 
 
@@ -304,8 +371,9 @@ def main(argv=None):
                           args.conf_level, args.seed, args.dpi)
     except ValueError as e:
         raise SystemExit(f"sensitivity: {e}") from e
-    for metric, indices in results.items():
-        print("\n".join(indices.table(metric)))
+    for metric, points in results.items():
+        for indices in points:
+            print("\n".join(indices.table(metric)))
 
 
 if __name__ == "__main__":

@@ -122,9 +122,9 @@ def parameter_value(ds, name, case):
 def constant_rpm(ds, case):
     """The crank speed (rpm) of a constant-speed case, NaN for a speed that varies:
     `rpm`, or a ramp whose `speed_from` equals `speed_to`, or a sine of amplitude 0
-    (each runs as the constant drive, docs/model.md §1.5; the file stores `rpm` NaN for
-    every `speed:` profile). `ds` is the flat study (an xarray Dataset) and `case` a
-    position along `case`."""
+    (each runs as the constant drive, docs/model.md §1.5; studyrun stores their speed
+    as `rpm`, a file with `rpm` NaN there is read the same). `ds` is the flat study (an
+    xarray Dataset) and `case` a position along `case`."""
     rpm = parameter_value(ds, "rpm", case)
     if math.isfinite(rpm):
         return rpm
@@ -401,6 +401,17 @@ def select_cases(ds, **params):
         else:
             mask &= np.isclose(values, value, rtol=1e-9, atol=0.0, equal_nan=True)
     return np.flatnonzero(mask)
+
+
+def series_rate(ds):
+    """The sample rate (Hz) of the stored series: the root attribute
+    `series_sample_rate`, else `sample_rate / decimate` (`decimate` 1 when absent). A
+    file whose grid has `output.decimate: k` stores every k-th output sample, so its
+    series are sampled at `sample_rate / k`, while its spectra, metrics and envelope
+    analysis are of the full-rate series (docs/result-file.md)."""
+    if "series_sample_rate" in ds.attrs:
+        return float(ds.attrs["series_sample_rate"])
+    return float(ds.attrs["sample_rate"]) / int(ds.attrs.get("decimate", 1))
 
 
 def analysis_window(ds):

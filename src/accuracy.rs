@@ -22,6 +22,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::output::{
+    provenance, AttrValue, CaseRecord, Layout, Param, ParamValues, Status, Storage, StudyWriter,
+    VarSpec,
+};
 use crate::signal::metrics::{vibration_metrics, VibrationMetrics};
 use crate::signal::replicates::predictability_horizon;
 use crate::simulate::{simulate, CaseOutput};
@@ -371,33 +375,25 @@ pub fn cheapest_within(
         .map(|(m, _)| (m, judged.len()))
 }
 
-/// Writes the measurements as a study-style file: one row (`case` dimension) per
-/// (case, setting), with the case's parameters, `source_case`, `method`, `rtol` (NaN
-/// for RK4) and `step` (RK4's, s; NaN for the others), the case's `horizon` and reference metric
-/// uncertainties, and the errors and costs as metrics. Rows whose run failed have
-/// status failed and the error message.
-pub fn write_file(
-    path: &std::path::Path,
-    study: &Study,
-    references: &[CaseReference],
+/// A float parameter of the accuracy file: `value` of each measurement, under
+/// `name` with its `units` and long name.
+fn f64_param(
     ms: &[Measurement],
-) -> anyhow::Result<()> {
-    use crate::output::{
-        provenance, CaseRecord, Layout, Param, ParamValues, Status, Storage, StudyWriter, VarSpec,
-    };
-    let case = |m: &Measurement| &study.cases[m.case].params;
-    let reference_of = |m: &Measurement| {
-        references
-            .iter()
-            .find(|r| r.case == m.case)
-            .expect("every case has a reference")
-    };
-    let f64_param = |name: &str, units: &str, long: &str, f: &dyn Fn(&Measurement) -> f64| Param {
+    (name, units, long): (&str, &str, &str),
+    value: impl Fn(&Measurement) -> f64,
+) -> Param {
+    Param {
         spec: VarSpec::new(name, units, long),
-        values: ParamValues::F64(ms.iter().map(f).collect()),
-    };
-    let mut parameters = vec![
-        f64_param("source_case", "1", "case id in the grid", &|m| {
+        values: ParamValues::F64(ms.iter().map(value).collect()),
+    }
+}
+
+/// The parameters that say how each measurement was run: `source_case` (the case id
+/// in the grid), `method`, `rtol` (NaN for RK4) and `step` (RK4's, s; NaN for the
+/// others).
+fn setting_parameters(study: &Study, ms: &[Measurement]) -> Vec<Param> {
+    vec![
+        f64_param(ms, ("source_case", "1", "case id in the grid"), |m| {
             study.cases[m.case].id as f64
         }),
         Param {
@@ -413,44 +409,69 @@ pub fn write_file(
             ),
         },
         f64_param(
-            "rtol",
-            "1",
-            "relative tolerance of dopri5, tsit5, dop853 and sdirk4 (NaN for rk4)",
-            &|m| match m.method {
+            ms,
+            (
+                "rtol",
+                "1",
+                "relative tolerance of dopri5, tsit5, dop853 and sdirk4 (NaN for rk4)",
+            ),
+            |m| match m.method {
                 Method::Rk4 { .. } => f64::NAN,
                 _ => describe(&m.method).1,
             },
         ),
         f64_param(
-            "step",
-            "s",
-            "fixed step of rk4 (NaN for the adaptive methods)",
-            &|m| match m.method {
+            ms,
+            (
+                "step",
+                "s",
+                "fixed step of rk4 (NaN for the adaptive methods)",
+            ),
+            |m| match m.method {
                 Method::Rk4 { step } => step,
                 _ => f64::NAN,
             },
         ),
-        f64_param(
+    ]
+}
+
+/// All parameters of the accuracy file: [`setting_parameters`], the case's
+/// `horizon` (s) and reference metric uncertainties (relative), its recorded
+/// parameters and its `location`.
+fn parameters(study: &Study, references: &[CaseReference], ms: &[Measurement]) -> Vec<Param> {
+    let case = |m: &Measurement| &study.cases[m.case].params;
+    let reference_of = |m: &Measurement| {
+        references
+            .iter()
+            .find(|r| r.case == m.case)
+            .expect("every case has a reference")
+    };
+    let mut parameters = setting_parameters(study, ms);
+    parameters.push(f64_param(
+        ms,
+        (
             "horizon",
             "s",
             "predictability horizon of the case (reference runs at rtol 1e-10 and 1e-11 part)",
-            &|m| reference_of(m).horizon,
         ),
-    ];
+        |m| reference_of(m).horizon,
+    ));
     for (c, ch) in ERROR_CHANNELS.iter().enumerate() {
         parameters.push(f64_param(
-            &format!("reference_metric_uncertainty_{ch}"),
-            "1",
-            "relative difference of the metric between the rtol 1e-10 and 1e-11 references",
-            &|m| reference_of(m).metric_uncertainty[c],
+            ms,
+            (
+                &format!("reference_metric_uncertainty_{ch}"),
+                "1",
+                "relative difference of the metric between the rtol 1e-10 and 1e-11 references",
+            ),
+            |m| reference_of(m).metric_uncertainty[c],
         ));
     }
     for p in study.recorded_parameters() {
         parameters.push(f64_param(
-            p.name,
-            p.dimension.file_units(),
-            p.long_name,
-            &|m| p.get(case(m)),
+            ms,
+            (p.name, p.dimension.file_units(), p.long_name),
+            |m| p.get(case(m)),
         ));
     }
     parameters.push(Param {
@@ -461,6 +482,13 @@ pub fn write_file(
                 .collect(),
         ),
     });
+    parameters
+}
+
+/// The metrics of the accuracy file: per channel the largest and RMS error and the
+/// metric error (relative), then the cost (wall time in s, step and evaluation
+/// counts).
+fn metrics() -> Vec<VarSpec> {
     let mut metrics = Vec::new();
     for ch in ERROR_CHANNELS {
         metrics.push(VarSpec::new(
@@ -487,6 +515,12 @@ pub fn write_file(
         VarSpec::new("rejected_steps", "1", "rejected steps"),
         VarSpec::new("rhs_evals", "1", "right-hand-side evaluations"),
     ]);
+    metrics
+}
+
+/// The root attributes of the accuracy file: provenance, the study, the reference
+/// and the horizon threshold, the duration and transient (s).
+fn attributes(study: &Study) -> Vec<(String, AttrValue)> {
     let mut attributes = provenance();
     attributes.extend([
         (
@@ -502,6 +536,20 @@ pub fn write_file(
         ("duration".to_string(), study.sampling.duration.into()),
         ("transient".to_string(), study.transient.into()),
     ]);
+    attributes
+}
+
+/// Writes the measurements as a study-style file: one row (`case` dimension) per
+/// (case, setting), with the case's parameters, `source_case`, `method`, `rtol` (NaN
+/// for RK4) and `step` (RK4's, s; NaN for the others), the case's `horizon` and reference metric
+/// uncertainties, and the errors and costs as metrics. Rows whose run failed have
+/// status failed and the error message.
+pub fn write_file(
+    path: &std::path::Path,
+    study: &Study,
+    references: &[CaseReference],
+    ms: &[Measurement],
+) -> anyhow::Result<()> {
     let layout = Layout {
         case_ids: (0..ms.len() as u64).collect(),
         times: Vec::new(),
@@ -509,8 +557,8 @@ pub fn write_file(
         reference_ids: vec![0],
         series: Vec::new(),
         spectra: Vec::new(),
-        metrics,
-        parameters,
+        metrics: metrics(),
+        parameters: parameters(study, references, ms),
         replicates: Vec::new(),
         replicate_metrics: Vec::new(),
         revolutions: Vec::new(),
@@ -520,7 +568,7 @@ pub fn write_file(
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
         reference_index: vec![0; ms.len()],
-        attributes,
+        attributes: attributes(study),
         storage: Storage::default(),
     };
     let (_, partial) = crate::output::side_paths(path);

@@ -27,6 +27,7 @@ mod integrators;
 mod interop;
 mod isa;
 mod kill_windows;
+mod labelled_data;
 mod layering;
 mod orders;
 mod output_selection;

@@ -91,6 +91,7 @@ fn case() -> impl Strategy<Value = CaseParams> {
                     speed: None,
                     gravity,
                     housing: None,
+                    noise_realization: 0,
                 }
             },
         )
@@ -201,5 +202,6 @@ fn stress_case() -> CaseParams {
         speed: None,
         gravity: true,
         housing: None,
+        noise_realization: 0,
     }
 }

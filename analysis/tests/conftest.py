@@ -8,9 +8,12 @@ Environment:
   STUDYRUN_MERGED_FILE optional, `studyrun merge` of those shards; unset: skip that comparison.
   STUDYRUN_DIAGNOSIS_FILE optional, the result of `studyrun studies/diagnosis.yaml`; unset: the
                        tests run that study with STUDYRUN_BIN (the studyrun binary), or skip.
+  STUDYRUN_BIN         the studyrun binary: runs the diagnosis study decimated by 2 (and other
+                       small studies the tests write); unset: skip those tests.
 """
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -81,6 +84,22 @@ def diagnosis_path(tmp_path_factory):
 
 
 @pytest.fixture(scope="package")
+def decimated_diagnosis(tmp_path_factory):
+    """studies/diagnosis.yaml with `output: {decimate: 2}` (series stored at 10 kHz of the
+    20 kHz output), run with STUDYRUN_BIN, loaded."""
+    binary = os.environ.get("STUDYRUN_BIN")
+    if not binary:
+        pytest.skip("STUDYRUN_BIN is not set")
+    folder = tmp_path_factory.mktemp("decimated")
+    grid = folder / "decimated.yaml"
+    grid.write_text((REPO / "studies/diagnosis.yaml").read_text() + "output: {decimate: 2}\n")
+    out = folder / "decimated.h5"
+    subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
+    with open_study(out) as ds:
+        yield ds.load()
+
+
+@pytest.fixture(scope="package")
 def diagnosis(diagnosis_path):
     with open_study(diagnosis_path) as ds:
         yield ds.load()
@@ -96,6 +115,22 @@ def smoke(smoke_path):
 def paper(paper_path):
     with open_study(paper_path) as ds:
         yield ds
+
+
+@pytest.fixture(scope="package")
+def installed(tmp_path_factory):
+    """The package installed from a copy of pyproject.toml and analysis/ (so the build
+    leaves nothing in the repository) into a target folder: (site folder, bin folder)."""
+    root = tmp_path_factory.mktemp("install")
+    source = root / "source"
+    shutil.copytree(REPO / "analysis", source / "analysis", ignore=shutil.ignore_patterns("tests", "__pycache__"))
+    shutil.copy(REPO / "pyproject.toml", source)
+    (source / "docs").mkdir()
+    shutil.copy(REPO / "docs" / "analysis.md", source / "docs")
+    site = root / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--no-index",
+                    "--target", str(site), str(source)], check=True, capture_output=True)
+    return site, site / "bin"
 
 
 def check_png(path, min_kb=15, min_pixels=300):

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis.dataset import SPLITS, make_splits, split_cases, torch_dataset, window_count, windows
+from analysis.dataset import (SPLITS, StratifyWarning, make_splits, split_cases, stratified_counts, torch_dataset,
+                              window_count, windows)
 from analysis.studyfile import analysis_window, open_shards, open_study, select_cases
 
 REPO = Path(__file__).resolve().parents[2]
@@ -123,6 +124,54 @@ def test_split_is_reproducible_with_a_seed_and_independent_of_order():
         order = np.lexsort((x2[name].start, x2[name].case))
         np.testing.assert_array_equal(np.lexsort((x1[name].start, x1[name].case)), np.arange(len(x1[name])))
         np.testing.assert_array_equal(x1[name].x, x2[name].x[order])
+
+
+def fault_study(counts, seed=0):
+    """A synthetic study (`synthetic_study`'s channels) whose `fault` classes have the
+    given numbers of cases, every case ok."""
+    ds = synthetic_study(cases=sum(counts.values()), seed=seed)
+    labels = np.concatenate([[name] * n for name, n in counts.items()]).astype(object)
+    return ds.assign(fault=("case", labels), status=("case", np.ones(ds.sizes["case"], dtype="int8")))
+
+
+def test_stratified_splits_hold_every_fault_class():
+    """28 cases (4 healthy, 4 outer, 10 inner, 10 ball) in 70/15/15: the plain split of
+    seed 0 leaves the healthy and outer classes out of validation; stratified by fault
+    every split holds every class, each class cut by `stratified_counts`, and the cases
+    of the plain split are the same set."""
+    counts = {"none": 4, "outer": 4, "inner": 10, "ball": 10}
+    ds = fault_study(counts)
+    plain = make_splits(ds, ["crank_moment"], 16, 16, labels=["fault"], seed=0)
+    assert not {"none", "outer"} & set(plain["validation"].labels["fault"])
+    splits = make_splits(ds, ["crank_moment"], 16, 16, labels=["fault"], seed=0, stratify="fault")
+    per_case = len(splits["train"]) // np.unique(splits["train"].case).size
+    for k, name in enumerate(SPLITS):
+        found = dict(zip(*np.unique(splits[name].labels["fault"], return_counts=True)))
+        assert {c: n // per_case for c, n in found.items()} == \
+            {c: int(stratified_counts(n, (0.7, 0.15, 0.15))[k]) for c, n in counts.items()}
+    cases = [set(np.unique(splits[n].case).tolist()) for n in SPLITS]
+    assert not (cases[0] & cases[1] or cases[0] & cases[2] or cases[1] & cases[2])
+    assert set.union(*cases) == set(ds["case"].values.tolist())
+    again = make_splits(ds.isel(case=np.arange(28)[::-1]), ["crank_moment"], 16, 16, labels=["fault"], seed=0,
+                        stratify="fault")
+    for name in SPLITS:
+        np.testing.assert_array_equal(np.unique(again[name].case), np.unique(splits[name].case))
+
+
+def test_stratified_counts_give_each_positive_split_a_case_first():
+    assert stratified_counts(3, (0.7, 0.15, 0.15)).tolist() == [1, 1, 1]
+    assert stratified_counts(10, (0.7, 0.15, 0.15)).tolist() == [7, 2, 1]
+    assert stratified_counts(28, (0.7, 0.15, 0.15)).sum() == 28
+    assert stratified_counts(4, (0.5, 0.5, 0.0)).tolist() == [2, 2, 0]
+
+
+def test_a_class_too_small_for_every_split_is_named():
+    ds = fault_study({"none": 2, "outer": 6, "inner": 6})
+    with pytest.warns(StratifyWarning, match=r"needs 3 cases to be in every split; none has 2 cases, none in test"):
+        splits = make_splits(ds, ["crank_moment"], 16, 16, labels=["fault"], stratify="fault")
+    assert "none" in set(splits["train"].labels["fault"]) and "none" in set(splits["validation"].labels["fault"])
+    with pytest.raises(ValueError, match=r"stratify \['defect_race'\] are not per-case variables"):
+        make_splits(ds, ["crank_moment"], 16, 16, stratify="defect_race")
 
 
 def test_bad_requests_are_named():

@@ -19,8 +19,8 @@ def test_paper_panels_default_window_and_one_ball_count(smoke, tmp_path, assert_
 
 
 def test_paper_panels_refuse_what_does_not_exist(smoke, tmp_path):
-    with pytest.raises(ValueError, match="channel"):
-        figures.paper_panels(smoke, "crank_ground", 600, 4e-6, "loaded_balls", tmp_path / "x.png")
+    with pytest.raises(ValueError, match="channel 'housing' is not a series of the file; it has slider_acceleration"):
+        figures.paper_panels(smoke, "crank_ground", 600, 4e-6, "housing", tmp_path / "x.png")
     with pytest.raises(ValueError, match="no successful case"):
         figures.paper_panels(smoke, "crank_ground", 300, 4e-6, "crank_moment", tmp_path / "x.png")
     with pytest.raises(ValueError, match="window"):

@@ -2,6 +2,7 @@
 counts or bearing cases, and the diagnosis figures on studies/diagnosis.yaml's file and on
 files changed to lack (or to add) what they draw."""
 
+import itertools
 import re
 import subprocess
 import sys
@@ -113,6 +114,9 @@ DIAGNOSIS_FIGURES = [
     "waterfall_bearing_force.png",
     "waterfall_accelerometer.png",
     "orders_bearing_force_run-up300-900rpm.png",
+    "rpm_orders_bearing_force_run-up300-900rpm.png",
+    "spectral_kurtosis_bearing_force_600rpm.png",
+    "spectral_kurtosis_accelerometer_600rpm.png",
 ] + [f"kurtogram_bearing_force_600rpm_{fault}.png" for fault in ("outer", "inner", "ball", "none")] + [
     "indicators_bearing_force.png",
     "indicators_accelerometer.png",
@@ -149,17 +153,18 @@ def drawn(monkeypatch):
 
 def test_the_diagnosis_study_shows_every_figure(diagnosis_report, assert_png):
     """Orbit, envelope spectra of the bearing force and of the housing accelerometer per
-    constant speed, spectrogram and order spectra of the run-up, a waterfall and indicator
-    heatmaps of each envelope channel, a kurtogram per fault label; nothing skipped."""
+    constant speed, spectrogram, order spectra and rpm–order map of the run-up, a waterfall,
+    the spectral kurtosis and indicator heatmaps of each envelope channel, a kurtogram per
+    fault label; nothing skipped."""
     outdir, index = diagnosis_report
     check_index(outdir, assert_png)
     section = diagnosis_section(index)
     assert linked_images(section) == DIAGNOSIS_FIGURES
     assert "not shown" not in section and "*" not in section
-    # The healthy cases (defect_race none) complete the grid: defect_race × speed_from tells
-    # every case apart.
-    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed_from" in section
-    assert "indicators of accelerometer (docs/model.md §7.7) over defect_race × speed_from" in section
+    # The healthy cases (defect_race none) complete the grid: defect_race × speed (speed_from,
+    # each case's speed shown by its profile) tells every case apart.
+    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed" in section
+    assert "indicators of accelerometer (docs/model.md §7.7) over defect_race × speed" in section
 
 
 def fault_cases(ds, rpm):
@@ -300,23 +305,35 @@ def test_kurtogram_figure_marks_the_band_of_the_file(diagnosis, drawn, tmp_path)
     assert best.get_x() == low
     n = int(dg.analysis_window(diagnosis).sum())
     assert len(ax.get_yticks()) == 2 * dg.kurtogram_depth(n)
-    assert ax.get_xlabel() == "frequency (Hz)"
+    assert ax.get_xlabel() == "frequency (Hz), series stored at 20000 Hz"
 
 
-def test_indicators_over_two_grid_axes(diagnosis, drawn, tmp_path):
+@pytest.mark.parametrize("order", ["file", "reversed"])
+def test_indicators_over_two_grid_axes(diagnosis, drawn, tmp_path, order):
     """Without the healthy cases (added outside the grid) the grid axes defect_race and
-    speed_from tell the cases apart: the heatmaps go over them, one cell per case."""
-    defects = diagnosis.isel(case=(diagnosis["fault"] != "none").values)
+    speed_from tell the cases apart: the heatmaps go over them, one cell per case, the
+    speeds in numeric order (constant speeds, then the run-up by its profile) however the
+    cases come, the races in the order they first come."""
+    defects = diagnosis.isel(case=np.flatnonzero((diagnosis["fault"] != "none").values))
+    if order == "reversed":
+        defects = defects.isel(case=np.arange(defects.sizes["case"])[::-1])
     path = tmp_path / "defects.h5"
     defects.to_netcdf(path, engine="h5netcdf")
     with report.open_study(path) as ds:
         index = report.Index("defects")
         report.render_indicators(ds, report.bearing_cases(ds), ["bearing_force"], tmp_path, index, 50)
-    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed_from" in "\n".join(index.lines)
+        cell = {(str(ds["defect_race"].values[k]), report.speed_text(ds, k)): float(ds["bearing_force_rms"].values[k])
+                for k in range(ds.sizes["case"])}
+    assert "indicators of bearing_force (docs/model.md §7.7) over defect_race × speed" in index.text()
     ax = drawn[-1].axes[0]
     assert ax.get_title() == "bearing_force_rms (N)"
-    assert [t.get_text() for t in ax.get_xticklabels()] == ["outer", "inner", "ball"]
-    assert [t.get_text() for t in ax.get_yticklabels()] == ["600 rpm", "900 rpm", "300 rpm"]
+    races = [t.get_text() for t in ax.get_xticklabels()]
+    assert races == (["outer", "inner", "ball"] if order == "file" else ["ball", "inner", "outer"])
+    speeds = [t.get_text() for t in ax.get_yticklabels()]
+    assert speeds == ["600 rpm", "900 rpm", "run-up 300→900 rpm"]
+    grid = ax.collections[0].get_array()
+    for (j, speed), (i, race) in itertools.product(enumerate(speeds), enumerate(races)):
+        assert grid[j, i] == cell[(race, speed)]
 
 
 def test_diagnosis_figures_are_skipped_without_their_data(diagnosis, tmp_path):
@@ -334,5 +351,6 @@ def test_diagnosis_figures_are_skipped_without_their_data(diagnosis, tmp_path):
     assert "orbit: not shown (the study has no eccentricity_x)" in section
     assert "no `envelope:`" in section
     images = linked_images(section)
-    assert images == ["spectrogram_bearing_force_run-up300-900rpm.png", "orders_bearing_force_run-up300-900rpm.png"]
-    assert "spectrogram of bearing_force at run-up 300→900 rpm, 0 to f_s/2" in section
+    assert images == ["spectrogram_bearing_force_run-up300-900rpm.png", "orders_bearing_force_run-up300-900rpm.png",
+                      "rpm_orders_bearing_force_run-up300-900rpm.png"]
+    assert "spectrogram of bearing_force at run-up 300→900 rpm, from 0 to where 99.5 % of its power lies" in section

@@ -18,6 +18,7 @@ from analysis.sensitivity import (
     grid_indices,
     plot_indices,
     saltelli_indices,
+    study_saltelli,
     study_grid,
 )
 from analysis.studyfile import open_study
@@ -174,8 +175,10 @@ def test_saltelli_study_file_layout_through_the_cli(tmp_path, assert_png):
     )
     direct = saltelli_indices(problem, x, ishigami(x), resamples=200, seed=4)
     results = analyse(path, ["ishigami"], resamples=200, seed=4, outdir=tmp_path / "fig")
-    np.testing.assert_array_equal(results["ishigami"].first, direct.first)
-    np.testing.assert_array_equal(results["ishigami"].total_conf, direct.total_conf)
+    (indices,) = results["ishigami"]
+    assert indices.point == {}
+    np.testing.assert_array_equal(indices.first, direct.first)
+    np.testing.assert_array_equal(indices.total_conf, direct.total_conf)
     assert_png(tmp_path / "fig" / "sensitivity_ishigami.png", min_kb=10)
     out = subprocess.run(
         [sys.executable, str(SCRIPT), str(path), "--metric", "ishigami",
@@ -184,6 +187,40 @@ def test_saltelli_study_file_layout_through_the_cli(tmp_path, assert_png):
     ).stdout
     assert "Saltelli design, 95% intervals (8192 cases)" in out
     assert f"{direct.first[1]:.4f} ± {direct.first_conf[1]:.4f}" in out
+
+
+def test_a_design_repeated_over_a_grid_axis_is_analysed_per_grid_point(tmp_path):
+    """A Saltelli design × rpm: [300, 600] (case id // design_rows the grid point, as
+    studyrun writes it) gives one set of indices per rpm, named in the output, equal to
+    each half analysed alone; the metric depends on a different parameter at each speed,
+    so pooled indices would be wrong for both. study_saltelli refuses to pool them."""
+    problem = {"num_vars": 3, "names": ["clearance", "rpm_x", "damping"], "bounds": [[-np.pi, np.pi]] * 3}
+    x = saltelli_sample.sample(problem, 64, seed=3)
+    rows = x.shape[0]
+    design = np.vstack([x, x])
+    rpm = np.repeat([300.0, 600.0], rows)
+    metric = np.where(rpm == 300.0, ishigami(design), 3.0 * design[:, 2] + 0.1 * design[:, 0])
+    names = ["clearance", "rpm_x", "damping"]
+    path = flat_study(
+        tmp_path / "repeated.h5",
+        {**{name: design[:, j] for j, name in enumerate(names)}, "rpm": rpm},
+        {"m": metric},
+        axes=("rpm",),
+        attrs={"design_method": "saltelli", "design_parameters": ",".join(names), "design_rows": np.int64(rows)},
+    )
+    results = analyse(path, ["m"], resamples=100, seed=1, outdir=tmp_path / "fig")["m"]
+    assert [r.point for r in results] == [{"rpm": 300.0}, {"rpm": 600.0}]
+    for indices, half in zip(results, (slice(0, rows), slice(rows, 2 * rows))):
+        direct = saltelli_indices(problem, design[half], metric[half], resamples=100, seed=1)
+        np.testing.assert_array_equal(indices.first, direct.first)
+    assert results[1].first[2] > 0.95 and results[0].first[2] < 0.05
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == ["sensitivity_m_0.png", "sensitivity_m_1.png"]
+    out = subprocess.run([sys.executable, str(SCRIPT), str(path), "--metric", "m", "--resamples", "100"],
+                         capture_output=True, text=True, check=True).stdout
+    assert "m at rpm = 300: Saltelli design" in out and "m at rpm = 600: Saltelli design" in out
+    with open_study(path) as ds:
+        with pytest.raises(ValueError, match="repeated at 2 grid points"):
+            study_saltelli(ds, "m")
 
 
 def test_plot_of_exact_indices(tmp_path, assert_png):

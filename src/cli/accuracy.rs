@@ -1,6 +1,10 @@
 //! `studyrun accuracy GRID`: the error and cost of every integrator setting.
 
 use super::*;
+use studyrun::accuracy::{
+    self, describe, setting_label, CaseReference, Measurement, ERROR_CHANNELS,
+};
+use studyrun::solve::Method;
 
 /// One value of `accuracy --rtols`: a number the accuracy study can judge
 /// ([`studyrun::accuracy::check_rtol`]).
@@ -20,7 +24,6 @@ pub(super) fn accuracy_command(
     force: bool,
     (methods, rtols): (&[String], &[f64]),
 ) -> Result<u8> {
-    use studyrun::accuracy::{self, describe, setting_label, ERROR_CHANNELS};
     if let Some(twice) = rtols
         .iter()
         .enumerate()
@@ -33,8 +36,32 @@ pub(super) fn accuracy_command(
         .exit();
     }
     let study = load(grid, &limits)?;
-    // The accuracy study keeps every case's reference run (all channels) to the end,
-    // and each worker two more runs.
+    check_memory(grid, &study, &limits)?;
+    let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
+    // The output first, before all the work: nothing there that is not ours, no
+    // replacing without --force, only a study file with it, and the lock held to the end.
+    output::overwrite::check_output(&output, force, &[grid])?;
+    let _lock = output::OutputLock::acquire(&output)?;
+    output::overwrite::check_output(&output, force, &[grid])?;
+    let jobs = limits.jobs;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
+    let ladder = ladder(&study, methods, rtols);
+    say!(
+        "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
+        ladder.len(),
+        study.cases.len()
+    );
+    let (refs, ms) = pool.install(|| accuracy::run(&study, &ladder))?;
+    print_cases(&study, &refs, &ms)?;
+    print_summary(&study, &refs, &ms, &ladder)?;
+    accuracy::write_file(&output, &study, &refs, &ms)?;
+    say!("studyrun: wrote {}", output.display());
+    Ok(EXIT_OK)
+}
+
+/// Refuses a grid whose accuracy study would not fit `limits`: it keeps the reference
+/// run (all channels) of every case to the end, and each worker two more runs.
+fn check_memory(grid: &Path, study: &Study, limits: &Limits) -> Result<()> {
     let run_bytes = (CHANNELS.len() + 1) as f64 * 8.0 * study.sampling.len() as f64;
     let need = (study.cases.len() + study.references.len() + 3 * limits.jobs) as f64 * run_bytes
         + 64.0 * 1024.0 * 1024.0;
@@ -55,14 +82,13 @@ pub(super) fn accuracy_command(
         }
         .into());
     }
-    let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
-    // The output first, before all the work: nothing there that is not ours, no
-    // replacing without --force, only a study file with it, and the lock held to the end.
-    output::overwrite::check_output(&output, force, &[grid])?;
-    let _lock = output::OutputLock::acquire(&output)?;
-    output::overwrite::check_output(&output, force, &[grid])?;
-    let jobs = limits.jobs;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
+    Ok(())
+}
+
+/// The settings measured: the default ladder or the adaptive methods at `rtols`, only
+/// the `methods` named (all when none), and only settings a grid file could run (RK4
+/// steps up to the sample spacing).
+fn ladder(study: &Study, methods: &[String], rtols: &[f64]) -> Vec<Method> {
     let mut ladder = if rtols.is_empty() {
         accuracy::default_ladder()
     } else {
@@ -74,13 +100,12 @@ pub(super) fn accuracy_command(
     // Only settings a grid file could run: RK4 steps up to the sample spacing.
     let spacing = 1.0 / study.sampling.sample_rate;
     ladder.retain(|m| accuracy::runnable(m, spacing));
-    say!(
-        "studyrun: accuracy of {} settings on {} cases (+2 reference runs each)",
-        ladder.len(),
-        study.cases.len()
-    );
-    let (refs, ms) = pool.install(|| accuracy::run(&study, &ladder))?;
-    for r in &refs {
+    ladder
+}
+
+/// Per case: its horizon and reference uncertainty, then one table row per setting.
+fn print_cases(study: &Study, refs: &[CaseReference], ms: &[Measurement]) -> Result<()> {
+    for r in refs {
         let c = &study.cases[r.case];
         let labels: Vec<String> = study
             .varied()
@@ -112,10 +137,21 @@ pub(super) fn accuracy_command(
             }
         }
     }
+    Ok(())
+}
+
+/// Over all cases: the worst and median metric error and the cost of each setting,
+/// the chaotic cases and the cheapest setting within 1 %.
+fn print_summary(
+    study: &Study,
+    refs: &[CaseReference],
+    ms: &[Measurement],
+    ladder: &[Method],
+) -> Result<()> {
     out!("\nover all cases (metric error: worst channel, worst case):")?;
     out!("| method | setting | worst metric error | median metric error | total wall (s) | total RHS |")?;
     out!("|---|---|---|---|---|---|")?;
-    for method in &ladder {
+    for method in ladder {
         let rows: Vec<_> = ms.iter().filter(|m| m.method == *method).collect();
         let mut errs: Vec<f64> = rows
             .iter()
@@ -144,13 +180,11 @@ pub(super) fn accuracy_command(
         refs.len(),
         chaotic.join(", ")
     )?;
-    match accuracy::cheapest_within(&ms, &refs, &ladder, 0.01, study.sampling.duration) {
+    match accuracy::cheapest_within(ms, refs, ladder, 0.01, study.sampling.duration) {
         Some((m, judged)) => {
             out!("cheapest setting with metric error < 1 % on the {judged} non-chaotic cases: {m}")?
         }
         None => out!("no setting keeps the metric error below 1 % on every non-chaotic case")?,
     }
-    accuracy::write_file(&output, &study, &refs, &ms)?;
-    say!("studyrun: wrote {}", output.display());
-    Ok(EXIT_OK)
+    Ok(())
 }

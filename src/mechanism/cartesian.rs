@@ -5,7 +5,7 @@
 //! `q = (x2, y2, θ2, x3, y3, θ3, x4, y4, θ4)`. The crank pivot is the origin, the
 //! slider runs on the x axis, and the crank is driven at `θ2(t)` (docs/model.md §1.5).
 
-use super::{CaseParams, Location, Sample, GRAVITY};
+use super::{CaseParams, Location, MechanismParams, Sample, GRAVITY};
 use crate::bearing::{BallBearing, Mounting};
 use crate::error::{ModelError, ParamError};
 use crate::multibody::{Body, BodyRef, Constraint, System};
@@ -30,6 +30,111 @@ pub struct CartesianSliderCrank {
     crank_rod_row: Option<usize>,
 }
 
+/// The crank, the connecting rod and the slider with their masses (kg) and
+/// inertias about their centres (kg m²).
+fn bodies(mp: &MechanismParams) -> Vec<Body> {
+    vec![
+        Body {
+            mass: mp.crank_mass,
+            inertia: mp.crank_inertia,
+        },
+        Body {
+            mass: mp.rod_mass,
+            inertia: mp.rod_inertia,
+        },
+        Body {
+            mass: mp.slider_mass,
+            inertia: mp.slider_inertia,
+        },
+    ]
+}
+
+/// The joints of the slider-crank: the two revolutes a bearing can take the place
+/// of, and the rod–slider revolute, the slider's guide and the crank's driver that
+/// every case has.
+struct Joints {
+    crank_ground: Constraint,
+    crank_rod: Constraint,
+    common: [Constraint; 3],
+}
+
+impl Joints {
+    /// The joints of `case`'s mechanism, at the bodies' ends (lengths in m).
+    fn of(case: &CaseParams) -> Self {
+        let (l2, l3) = (case.mechanism.crank_length, case.mechanism.rod_length);
+        Self {
+            crank_ground: Constraint::Revolute {
+                i: BodyRef::Ground,
+                s_i: [0.0, 0.0],
+                j: CRANK,
+                s_j: [-0.5 * l2, 0.0],
+            },
+            crank_rod: Constraint::Revolute {
+                i: CRANK,
+                s_i: [0.5 * l2, 0.0],
+                j: ROD,
+                s_j: [-0.5 * l3, 0.0],
+            },
+            common: [
+                Constraint::Revolute {
+                    i: ROD,
+                    s_i: [0.5 * l3, 0.0],
+                    j: SLIDER,
+                    s_j: [0.0, 0.0],
+                },
+                Constraint::Translational {
+                    i: BodyRef::Ground,
+                    s_i: [0.0, 0.0],
+                    n_i: [0.0, 1.0],
+                    j: SLIDER,
+                    s_j: [0.0, 0.0],
+                    theta0: 0.0,
+                },
+                Constraint::Driver {
+                    body: CRANK,
+                    theta0: 0.0,
+                    drive: case.drive(),
+                },
+            ],
+        }
+    }
+}
+
+/// The ideal mechanism (every joint in `constraints` ideal, gravity in m/s²)
+/// evaluated at `t = 0`: its positions (m, rad) and velocities (m/s, rad/s) there
+/// start every case (paper Table 3). They are the in-line configuration of crank
+/// length `l2` and rod length `l3` (m), made consistent with the constraints.
+fn ideal_mechanism(
+    bodies: &[Body],
+    constraints: Vec<Constraint>,
+    gravity: Option<f64>,
+    (l2, l3): (f64, f64),
+) -> Result<System<BallBearing>, ParamError> {
+    let q_nominal = vec![
+        0.5 * l2,
+        0.0,
+        0.0,
+        l2 + 0.5 * l3,
+        0.0,
+        0.0,
+        l2 + l3,
+        0.0,
+        0.0,
+    ];
+    let mut ideal = System::new(
+        bodies.to_vec(),
+        constraints,
+        Vec::new(),
+        gravity,
+        Vec::new(),
+    )?;
+    ideal.initial_state(&q_nominal, &[0.0; 9]);
+    ideal
+        .evaluate(0.0, &[], false)
+        .map_err(|e| ParamError::new("mechanism", "initial configuration", e.to_string()))?;
+    Ok(ideal)
+}
+
 impl CartesianSliderCrank {
     /// Builds the case; refuses invalid parameters with the field named, and a
     /// bearing case with a housing (docs/model.md §3.9), which only the production
@@ -46,82 +151,17 @@ impl CartesianSliderCrank {
         }
         let mp = &case.mechanism;
         let (l2, l3) = (mp.crank_length, mp.rod_length);
-        let bodies = vec![
-            Body {
-                mass: mp.crank_mass,
-                inertia: mp.crank_inertia,
-            },
-            Body {
-                mass: mp.rod_mass,
-                inertia: mp.rod_inertia,
-            },
-            Body {
-                mass: mp.slider_mass,
-                inertia: mp.slider_inertia,
-            },
-        ];
-        let crank_ground = Constraint::Revolute {
-            i: BodyRef::Ground,
-            s_i: [0.0, 0.0],
-            j: CRANK,
-            s_j: [-0.5 * l2, 0.0],
-        };
-        let crank_rod = Constraint::Revolute {
-            i: CRANK,
-            s_i: [0.5 * l2, 0.0],
-            j: ROD,
-            s_j: [-0.5 * l3, 0.0],
-        };
-        let common = [
-            Constraint::Revolute {
-                i: ROD,
-                s_i: [0.5 * l3, 0.0],
-                j: SLIDER,
-                s_j: [0.0, 0.0],
-            },
-            Constraint::Translational {
-                i: BodyRef::Ground,
-                s_i: [0.0, 0.0],
-                n_i: [0.0, 1.0],
-                j: SLIDER,
-                s_j: [0.0, 0.0],
-                theta0: 0.0,
-            },
-            Constraint::Driver {
-                body: CRANK,
-                theta0: 0.0,
-                drive: case.drive(),
-            },
-        ];
+        let bodies = bodies(mp);
+        let Joints {
+            crank_ground,
+            crank_rod,
+            common,
+        } = Joints::of(case);
         let gravity = case.gravity.then_some(GRAVITY);
-
-        // The ideal mechanism gives the initial positions and velocities (paper Table 3).
-        let q_nominal = vec![
-            0.5 * l2,
-            0.0,
-            0.0,
-            l2 + 0.5 * l3,
-            0.0,
-            0.0,
-            l2 + l3,
-            0.0,
-            0.0,
-        ];
         let mut ideal_constraints = vec![crank_ground.clone(), crank_rod.clone()];
         ideal_constraints.extend(common.clone());
-        let mut ideal = System::new(
-            bodies.clone(),
-            ideal_constraints,
-            Vec::new(),
-            gravity,
-            Vec::new(),
-        )?;
-        ideal.initial_state(&q_nominal, &[0.0; 9]);
-        ideal
-            .evaluate(0.0, &[], false)
-            .map_err(|e| ParamError::new("mechanism", "initial configuration", e.to_string()))?;
+        let ideal = ideal_mechanism(&bodies, ideal_constraints, gravity, (l2, l3))?;
         let (q0, qd0) = (ideal.q().to_vec(), ideal.qd().to_vec());
-
         let (kept, independent, bearing) = match case.location {
             Location::Ideal => {
                 return Ok(Self::assemble(

@@ -141,6 +141,10 @@ pub struct CaseParams {
     /// the rigid ground. Only at [`Location::CrankGround`]; the ideal mechanism
     /// ignores it.
     pub housing: Option<Housing>,
+    /// Which realisation of the sensors' noise the case draws (docs/model.md §7.8):
+    /// mixed into each sensor's noise seed, 0 leaving it as it is. The mechanism does
+    /// not depend on it.
+    pub noise_realization: u64,
 }
 
 /// The housing of docs/model.md §3.9: a mass on springs and dampers, the same in x
@@ -197,6 +201,7 @@ impl Default for CaseParams {
             speed: None,
             gravity: false,
             housing: None,
+            noise_realization: 0,
         }
     }
 }

@@ -100,74 +100,11 @@ struct Workspace {
     scratch_z: Vec<f64>,
 }
 
-impl<F: ForceElement> System<F> {
-    /// Assembles a system. `independent` lists the indices in `q` of the
-    /// coordinates the integrator advances (`3 × bodies − constraint rows` of them);
-    /// `gravity` is the acceleration along −y (m/s²) when the effect is on.
-    pub fn new(
-        bodies: Vec<Body>,
-        constraints: Vec<Constraint>,
-        elements: Vec<F>,
-        gravity: Option<f64>,
-        independent: Vec<usize>,
-    ) -> Result<Self, ParamError> {
-        let n = 3 * bodies.len();
-        for (k, b) in bodies.iter().enumerate() {
-            if !(b.mass.is_finite() && b.mass > 0.0) {
-                return Err(ParamError::new(
-                    format!("bodies[{k}].mass"),
-                    b.mass,
-                    "finite and > 0 kg",
-                ));
-            }
-            if !(b.inertia.is_finite() && b.inertia > 0.0) {
-                return Err(ParamError::new(
-                    format!("bodies[{k}].inertia"),
-                    b.inertia,
-                    "finite and > 0 kg m^2",
-                ));
-            }
-        }
-        if let Some(g) = gravity {
-            if !g.is_finite() {
-                return Err(ParamError::new(
-                    "gravity",
-                    g,
-                    "a finite acceleration in m/s^2",
-                ));
-            }
-        }
-        let mut row_start = Vec::with_capacity(constraints.len());
-        let mut m = 0;
-        for c in &constraints {
-            row_start.push(m);
-            m += c.rows();
-        }
-        if m > n || independent.len() != n - m {
-            return Err(ParamError::new(
-                "independent",
-                format!("{} coordinates", independent.len()),
-                format!(
-                    "exactly {} (3 x {} bodies - {m} constraint equations)",
-                    n.saturating_sub(m),
-                    bodies.len()
-                ),
-            ));
-        }
-        let mut is_indep = vec![false; n];
-        for &k in &independent {
-            if k >= n || is_indep[k] {
-                return Err(ParamError::new(
-                    "independent",
-                    k,
-                    format!("distinct coordinate indices below {n}"),
-                ));
-            }
-            is_indep[k] = true;
-        }
-        let dependent: Vec<usize> = (0..n).filter(|&k| !is_indep[k]).collect();
-        let nz = independent.len();
-        let ws = Workspace {
+impl Workspace {
+    /// Zeroed buffers for `n` coordinates, `m` constraint equations and `nz`
+    /// independent coordinates.
+    fn new(n: usize, m: usize, nz: usize) -> Self {
+        Self {
             q: vec![0.0; n],
             q_anchor: vec![0.0; n],
             qd: vec![0.0; n],
@@ -187,7 +124,108 @@ impl<F: ForceElement> System<F> {
             reduced_rhs: vec![0.0; nz],
             scratch_m: vec![0.0; m],
             scratch_z: vec![0.0; nz],
-        };
+        }
+    }
+}
+
+/// Refuses a body whose mass (kg) or inertia (kg m²) is not finite and positive, and
+/// a non-finite gravity (m/s²).
+fn check_bodies(bodies: &[Body], gravity: Option<f64>) -> Result<(), ParamError> {
+    for (k, b) in bodies.iter().enumerate() {
+        if !(b.mass.is_finite() && b.mass > 0.0) {
+            return Err(ParamError::new(
+                format!("bodies[{k}].mass"),
+                b.mass,
+                "finite and > 0 kg",
+            ));
+        }
+        if !(b.inertia.is_finite() && b.inertia > 0.0) {
+            return Err(ParamError::new(
+                format!("bodies[{k}].inertia"),
+                b.inertia,
+                "finite and > 0 kg m^2",
+            ));
+        }
+    }
+    if let Some(g) = gravity {
+        if !g.is_finite() {
+            return Err(ParamError::new(
+                "gravity",
+                g,
+                "a finite acceleration in m/s^2",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The first row of each constraint in `Φ`, and the dependent coordinates: those
+/// of `q` not in `independent`, which must name `3 × bodies − constraint rows`
+/// distinct coordinates.
+fn partition(
+    bodies: &[Body],
+    constraints: &[Constraint],
+    independent: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>), ParamError> {
+    let n = 3 * bodies.len();
+    let mut row_start = Vec::with_capacity(constraints.len());
+    let mut m = 0;
+    for c in constraints {
+        row_start.push(m);
+        m += c.rows();
+    }
+    if m > n || independent.len() != n - m {
+        return Err(ParamError::new(
+            "independent",
+            format!("{} coordinates", independent.len()),
+            format!(
+                "exactly {} (3 x {} bodies - {m} constraint equations)",
+                n.saturating_sub(m),
+                bodies.len()
+            ),
+        ));
+    }
+    let mut is_indep = vec![false; n];
+    for &k in independent {
+        if k >= n || is_indep[k] {
+            return Err(ParamError::new(
+                "independent",
+                k,
+                format!("distinct coordinate indices below {n}"),
+            ));
+        }
+        is_indep[k] = true;
+    }
+    let dependent = (0..n).filter(|&k| !is_indep[k]).collect();
+    Ok((row_start, dependent))
+}
+
+/// The generalised mass of coordinate `k` of `q`: its body's inertia (kg m²) for an
+/// angle, its mass (kg) for a position.
+#[inline]
+fn generalised_mass(bodies: &[Body], k: usize) -> f64 {
+    let b = &bodies[k / 3];
+    if k % 3 == 2 {
+        b.inertia
+    } else {
+        b.mass
+    }
+}
+
+impl<F: ForceElement> System<F> {
+    /// Assembles a system. `independent` lists the indices in `q` of the
+    /// coordinates the integrator advances (`3 × bodies − constraint rows` of them);
+    /// `gravity` is the acceleration along −y (m/s²) when the effect is on.
+    pub fn new(
+        bodies: Vec<Body>,
+        constraints: Vec<Constraint>,
+        elements: Vec<F>,
+        gravity: Option<f64>,
+        independent: Vec<usize>,
+    ) -> Result<Self, ParamError> {
+        check_bodies(&bodies, gravity)?;
+        let (row_start, dependent) = partition(&bodies, &constraints, &independent)?;
+        let ws = Workspace::new(3 * bodies.len(), dependent.len(), independent.len());
         Ok(Self {
             bodies,
             constraints,
@@ -439,67 +477,10 @@ impl<F: ForceElement> System<F> {
     /// Applied forces, then `q̈` from the reduced equations.
     fn solve_accelerations(&mut self, t: f64) -> Result<(), ModelError> {
         let (m, nz) = (self.dependent.len(), self.independent.len());
-        // Applied forces: gravity and the force elements.
-        {
-            let ws = &mut self.ws;
-            ws.forces.iter_mut().for_each(|f| *f = 0.0);
-            if let Some(g) = self.gravity {
-                for (k, b) in self.bodies.iter().enumerate() {
-                    ws.forces[3 * k + 1] -= b.mass * g;
-                }
-            }
-            for e in &mut self.elements {
-                e.add_forces(t, &ws.q, &ws.qd, &mut ws.forces);
-            }
-        }
+        self.applied_forces(t);
+        self.transfer(t);
+        self.reduced_equations();
         let ws = &mut self.ws;
-        let n = ws.q.len();
-        for (k, c) in self.constraints.iter().enumerate() {
-            let r0 = self.row_start[k];
-            c.gamma(t, &ws.q, &ws.qd, &mut ws.gamma[r0..r0 + c.rows()]);
-        }
-        // B_u = −Φu⁻¹ Φz and c_u = Φu⁻¹ γ.
-        for (a, &kz) in self.independent.iter().enumerate() {
-            let col = &mut ws.b_u[a * m..(a + 1) * m];
-            for (r, c) in col.iter_mut().enumerate() {
-                *c = -ws.jac[r * n + kz];
-            }
-            ws.lu.solve_in_place(col, &mut ws.scratch_m);
-        }
-        ws.c_u.copy_from_slice(&ws.gamma);
-        ws.lu.solve_in_place(&mut ws.c_u, &mut ws.scratch_m);
-        // Reduced mass matrix Bᵀ M B and right-hand side Bᵀ (Q − M c).
-        let mass = |k: usize| -> f64 {
-            let b = &self.bodies[k / 3];
-            if k % 3 == 2 {
-                b.inertia
-            } else {
-                b.mass
-            }
-        };
-        for a in 0..nz {
-            let ba = &ws.b_u[a * m..(a + 1) * m];
-            for b in 0..nz {
-                let bb = &ws.b_u[b * m..(b + 1) * m];
-                let mut s: f64 = self
-                    .dependent
-                    .iter()
-                    .enumerate()
-                    .map(|(r, &k)| mass(k) * ba[r] * bb[r])
-                    .sum();
-                if a == b {
-                    s += mass(self.independent[a]);
-                }
-                ws.reduced[a * nz + b] = s;
-            }
-            ws.reduced_rhs[a] = ws.forces[self.independent[a]]
-                + self
-                    .dependent
-                    .iter()
-                    .enumerate()
-                    .map(|(r, &k)| ba[r] * (ws.forces[k] - mass(k) * ws.c_u[r]))
-                    .sum::<f64>();
-        }
         if nz > 0 {
             ws.reduced_lu
                 .factor(&ws.reduced)
@@ -524,13 +505,83 @@ impl<F: ForceElement> System<F> {
         Ok(())
     }
 
+    /// The applied forces `Q` at time `t` (s) into `ws.forces` (N, N m): gravity and
+    /// the force elements.
+    #[inline]
+    fn applied_forces(&mut self, t: f64) {
+        let ws = &mut self.ws;
+        ws.forces.iter_mut().for_each(|f| *f = 0.0);
+        if let Some(g) = self.gravity {
+            for (k, b) in self.bodies.iter().enumerate() {
+                ws.forces[3 * k + 1] -= b.mass * g;
+            }
+        }
+        for e in &mut self.elements {
+            e.add_forces(t, &ws.q, &ws.qd, &mut ws.forces);
+        }
+    }
+
+    /// The dependent accelerations in terms of the independent ones at time `t` (s),
+    /// `ü = B_u z̈ + c_u`: `B_u = −Φu⁻¹ Φz` (dimensionless or m/rad) into `ws.b_u`
+    /// and `c_u = Φu⁻¹ γ` (m/s², rad/s²) into `ws.c_u`, with `Φu` factored.
+    #[inline]
+    fn transfer(&mut self, t: f64) {
+        let m = self.dependent.len();
+        let ws = &mut self.ws;
+        let n = ws.q.len();
+        for (k, c) in self.constraints.iter().enumerate() {
+            let r0 = self.row_start[k];
+            c.gamma(t, &ws.q, &ws.qd, &mut ws.gamma[r0..r0 + c.rows()]);
+        }
+        for (a, &kz) in self.independent.iter().enumerate() {
+            let col = &mut ws.b_u[a * m..(a + 1) * m];
+            for (r, c) in col.iter_mut().enumerate() {
+                *c = -ws.jac[r * n + kz];
+            }
+            ws.lu.solve_in_place(col, &mut ws.scratch_m);
+        }
+        ws.c_u.copy_from_slice(&ws.gamma);
+        ws.lu.solve_in_place(&mut ws.c_u, &mut ws.scratch_m);
+    }
+
+    /// The reduced mass matrix `Bᵀ M B` into `ws.reduced` and the right-hand side
+    /// `Bᵀ (Q − M c)` into `ws.reduced_rhs` (N, N m), from [`Self::transfer`]'s
+    /// `B_u`, `c_u` and the applied forces.
+    #[inline]
+    fn reduced_equations(&mut self) {
+        let (m, nz) = (self.dependent.len(), self.independent.len());
+        let ws = &mut self.ws;
+        let mass = |k: usize| generalised_mass(&self.bodies, k);
+        for a in 0..nz {
+            let ba = &ws.b_u[a * m..(a + 1) * m];
+            for b in 0..nz {
+                let bb = &ws.b_u[b * m..(b + 1) * m];
+                let mut s: f64 = self
+                    .dependent
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &k)| mass(k) * ba[r] * bb[r])
+                    .sum();
+                if a == b {
+                    s += mass(self.independent[a]);
+                }
+                ws.reduced[a * nz + b] = s;
+            }
+            ws.reduced_rhs[a] = ws.forces[self.independent[a]]
+                + self
+                    .dependent
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &k)| ba[r] * (ws.forces[k] - mass(k) * ws.c_u[r]))
+                    .sum::<f64>();
+        }
+    }
+
     /// `Φuᵀ λ = (Q − M q̈)_u`.
     fn solve_multipliers(&mut self) {
         let ws = &mut self.ws;
         for (r, &k) in self.dependent.iter().enumerate() {
-            let b = &self.bodies[k / 3];
-            let mass = if k % 3 == 2 { b.inertia } else { b.mass };
-            ws.lambda[r] = ws.forces[k] - mass * ws.qdd[k];
+            ws.lambda[r] = ws.forces[k] - generalised_mass(&self.bodies, k) * ws.qdd[k];
         }
         ws.lu
             .solve_transpose_in_place(&mut ws.lambda, &mut ws.scratch_m);

@@ -105,7 +105,14 @@ pub(crate) fn run_case(
         let input = out
             .channel(sensor.channel)
             .expect("sensor channels are validated");
-        let (noisy, clean) = sensor.measure(input, dt, study.analysis_window(), case.id, index);
+        let (noisy, clean) = sensor.measure(
+            input,
+            dt,
+            study.analysis_window(),
+            case.id,
+            params.noise_realization,
+            index,
+        );
         sensor_series.extend([noisy, clean]);
     }
     let analysis = analyse(

@@ -17,6 +17,7 @@ mod error;
 mod journal;
 mod order;
 mod progress;
+mod references;
 mod stats;
 
 pub use case::check_eccentricity;
@@ -24,6 +25,8 @@ use case::run_case;
 pub use error::RunError;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
+pub(crate) use references::run_references;
+use references::{each_reference, ReferenceCache};
 pub use stats::RunStats;
 
 use std::collections::HashSet;
@@ -32,8 +35,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, SendError, SyncSender, TrySendError};
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use crate::output::OutputError;
 use crate::output::{
     new_journal_path, overwrite, remove_durably, rename_durably, side_paths, ChunkEncoder,
@@ -41,7 +42,6 @@ use crate::output::{
 };
 use crate::signal::spectrum::{SpectrumPlan, Window};
 use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
-use crate::simulate::{simulate, CaseOutput};
 use crate::study::Shard;
 use crate::study::{stored_reference_channels, study_layout, Study, StudyFingerprint};
 
@@ -99,33 +99,10 @@ pub struct RunSummary {
     pub stats: RunStats,
 }
 
-/// What a scoped thread returned; its panic goes on in this thread.
-fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
-    handle
-        .join()
-        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-}
-
 /// Renames `from` to `to` (atomic within a file system), both on the disk when it
 /// returns ([`rename_durably`]).
 fn rename(from: &Path, to: &Path) -> Result<(), OutputError> {
     rename_durably(from, to).map_err(OutputError::io(format!("rename {} to", from.display()), to))
-}
-
-/// The ideal-mechanism runs every case is compared with.
-pub(crate) fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
-    study
-        .references
-        .par_iter()
-        .enumerate()
-        .map(|(index, r)| {
-            simulate(r, &study.solver, &study.sampling).map_err(|source| RunError::Reference {
-                index,
-                rpm: r.rpm,
-                source,
-            })
-        })
-        .collect()
 }
 
 /// The spectrum window of a study.
@@ -186,7 +163,8 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         Begin::Resume(reader) => Some(reader),
         Begin::Fresh(_) => None,
     };
-    let (mut writer, references, data) = create_file(study, opts, &layout, resuming, &mut stats)?;
+    let (mut writer, data) = create_file(study, opts, &layout, resuming, &mut stats)?;
+    let references = ReferenceCache::new(study, opts.jobs);
     let (mut journal, replayed) = match begin {
         Begin::Resume(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
         Begin::Fresh(journal) => (journal, Replayed::default()),
@@ -416,31 +394,26 @@ fn complete_result(
     })
 }
 
-/// Creates the partial file and writes the ideal references into it; the references
-/// run while the file is created. A result file already at the output (`--force`)
-/// stays until the finished run's file is renamed over it, so a run stopped on the
-/// way loses nothing: its journal beside the old result resumes the new run. Returns
-/// the writer, the references and which partial file it writes (a resumed run writes
-/// the other one than its journal's cases are in).
+/// Creates the partial file and writes the ideal references into it, made `jobs` at a
+/// time. A result file already at the output (`--force`) stays until the finished
+/// run's file is renamed over it, so a run stopped on the way loses nothing: its
+/// journal beside the old result resumes the new run. Returns the writer and which
+/// partial file it writes (a resumed run writes the other one than its journal's
+/// cases are in).
 fn create_file(
     study: &Study,
     opts: &RunOptions,
     layout: &Layout,
     reader: Option<&JournalReader>,
     stats: &mut RunStats,
-) -> Result<(StudyWriter, Vec<CaseOutput>, DataFile), RunError> {
+) -> Result<(StudyWriter, DataFile), RunError> {
     let data = reader.map_or(DataFile::Partial, |r| r.data_file().other());
     let partial_path = data.path(&opts.output);
     let cpu = thread_cpu();
-    let (references, writer) = std::thread::scope(|scope| {
-        let references = scope.spawn(|| run_references(study));
-        let writer =
-            StudyWriter::create(&partial_path, layout).map_err(OutputError::file(&partial_path));
-        (joined(references), writer)
-    });
-    let (references, mut writer) = (references?, writer?);
+    let mut writer =
+        StudyWriter::create(&partial_path, layout).map_err(OutputError::file(&partial_path))?;
     let stored = stored_reference_channels(study);
-    for (k, r) in references.iter().enumerate() {
+    each_reference(study, opts.jobs, |k, r| {
         let series: Vec<Vec<f64>> = stored
             .iter()
             .map(|c| study.keep_stored_samples(r.channel(c).expect("reference channel").to_vec()))
@@ -449,9 +422,10 @@ fn create_file(
         writer
             .write_reference(k, &series)
             .map_err(OutputError::file(&partial_path))?;
-    }
+        Ok(())
+    })?;
     stats.create = thread_cpu() - cpu;
-    Ok((writer, references, data))
+    Ok((writer, data))
 }
 
 /// What the workers need to run cases.
@@ -459,8 +433,8 @@ struct Work<'a> {
     study: &'a Study,
     /// The study's case index of every file row.
     rows: &'a [usize],
-    /// The ideal references, by index.
-    references: &'a [CaseOutput],
+    /// The ideal references, by index, made where a case needs one.
+    references: &'a ReferenceCache<'a>,
     storage: crate::output::Storage,
     jobs: usize,
     /// When the run started (for the workers' idle time at the end).
@@ -529,12 +503,15 @@ fn run_pending(
                 let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
-                    let reference = &work.references[case.reference];
+                    let reference = work
+                        .references
+                        .get(case.reference)
+                        .expect("every reference ran when the file was created");
                     let result = run_case(
                         work.study,
                         row,
                         case,
-                        reference,
+                        &reference,
                         &mut plan,
                         envelope.as_mut(),
                         orders.as_mut(),

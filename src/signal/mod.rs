@@ -392,30 +392,12 @@ pub struct CaseAnalysis {
     pub order_spectra: Vec<Vec<f64>>,
 }
 
-/// The spectra of `spectrum_channels` (in `out` or `sensors`, the case's sensor
-/// series) and the metrics of `out` (the case `params`) against `reference` (the
-/// ideal mechanism at the same speed and sample times), over the analysed `window`
-/// of samples; with `envelope`, also its spectra (after the others) and metrics
-/// (before `wall_time`); with `orders`, the order spectra.
-#[allow(clippy::too_many_arguments)]
-pub fn analyse(
-    params: &CaseParams,
-    out: &CaseOutput,
-    sensors: &[Vec<f64>],
-    reference: &CaseOutput,
-    window: Range<usize>,
-    spectrum_channels: &[AnalysisChannel],
-    plan: &mut SpectrumPlan,
-    envelope: Option<&mut EnvelopeAnalysis>,
-    orders: Option<&mut OrderAnalysis>,
-) -> Result<CaseAnalysis, SpectrumError> {
-    let mut spectra = Vec::with_capacity(spectrum_channels.len());
-    for ch in spectrum_channels {
-        let series = ch.samples(out, sensors);
-        let mut amp = vec![0.0; plan.bins()];
-        plan.amplitude(&series[window.clone()], &mut amp)?;
-        spectra.push(amp);
-    }
+/// The metrics every case has, over the analysed `window` of samples: the RMS and
+/// peak deviation of each vibration channel from the ideal `reference` with the
+/// reference's RMS, the largest bearing force (N), the fewest and most loaded balls,
+/// and the integrator's work (steps, rejected steps, evaluations, events; the
+/// times (s) of a switch to SDIRK4 and of settled chatter, NaN if none).
+fn case_metrics(out: &CaseOutput, reference: &CaseOutput, window: Range<usize>) -> Vec<f64> {
     let m = vibration_metrics(out, reference, window.clone());
     let analysed = |name: &str| &out.channel(name).expect("channel exists")[window.clone()];
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -441,6 +423,34 @@ pub fn analyse(
         out.stats.switched_at.unwrap_or(f64::NAN),
         out.stats.chatter_at.unwrap_or(f64::NAN),
     ]);
+    metrics
+}
+
+/// The spectra of `spectrum_channels` (in `out` or `sensors`, the case's sensor
+/// series) and the metrics of `out` (the case `params`) against `reference` (the
+/// ideal mechanism at the same speed and sample times), over the analysed `window`
+/// of samples; with `envelope`, also its spectra (after the others) and metrics
+/// (before `wall_time`); with `orders`, the order spectra.
+#[allow(clippy::too_many_arguments)]
+pub fn analyse(
+    params: &CaseParams,
+    out: &CaseOutput,
+    sensors: &[Vec<f64>],
+    reference: &CaseOutput,
+    window: Range<usize>,
+    spectrum_channels: &[AnalysisChannel],
+    plan: &mut SpectrumPlan,
+    envelope: Option<&mut EnvelopeAnalysis>,
+    orders: Option<&mut OrderAnalysis>,
+) -> Result<CaseAnalysis, SpectrumError> {
+    let mut spectra = Vec::with_capacity(spectrum_channels.len());
+    for ch in spectrum_channels {
+        let series = ch.samples(out, sensors);
+        let mut amp = vec![0.0; plan.bins()];
+        plan.amplitude(&series[window.clone()], &mut amp)?;
+        spectra.push(amp);
+    }
+    let mut metrics = case_metrics(out, reference, window.clone());
     let mut squared = Vec::new();
     let wants_squared = orders.as_ref().is_some_and(|o| o.settings.envelope);
     if let Some(envelope) = envelope {

@@ -42,19 +42,24 @@ pub struct Noise {
 
 impl Sensor {
     /// The sensor's output for the `input` series (the stored [`Sensor::channel`],
-    /// sampled every `dt` s) of case `case_id`, the sensor being number `index` of
-    /// its study: `(noisy, clean)`, the noise at the requested SNR over `window`.
+    /// sampled every `dt` s) of case `case_id` in its noise realisation
+    /// `realization`, the sensor being number `index` of its study: `(noisy,
+    /// clean)`, the noise at the requested SNR over `window`.
     pub fn measure(
         &self,
         input: &[f64],
         dt: f64,
         window: Range<usize>,
         case_id: u64,
+        realization: u64,
         index: usize,
     ) -> (Vec<f64>, Vec<f64>) {
         let clean = self.transducer.respond(input, dt);
         let noisy = match self.noise {
-            Some(n) => add_noise(&clean, window, n.snr_db, noise_seed(n.seed, case_id, index)),
+            Some(n) => {
+                let seed = noise_seed(n.seed, case_id, index, realization);
+                add_noise(&clean, window, n.snr_db, seed)
+            }
             None => clean.clone(),
         };
         (noisy, clean)
@@ -195,15 +200,22 @@ fn mul(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
     c
 }
 
-/// The seed of one sensor's noise in one case: the study's seed, the case id and
-/// the sensor's position mixed through SplitMix64, so the noise does not depend on
-/// the worker, the order, the shard or a resume.
-pub fn noise_seed(study_seed: u64, case_id: u64, sensor: usize) -> u64 {
+/// The seed of one sensor's noise in one case: the study's seed, the case id, the
+/// sensor's position and the case's noise realisation mixed through SplitMix64, so
+/// the noise does not depend on the worker, the order, the shard or a resume.
+/// Realisation 0 gives the seed of the first three alone; realisation `r > 0` XORs
+/// it with `r` and takes the first output of one more SplitMix64 (docs/model.md §7.8).
+pub fn noise_seed(study_seed: u64, case_id: u64, sensor: usize, realization: u64) -> u64 {
     let mut g = SplitMix64::new(study_seed);
     let a = g.next_u64() ^ case_id;
     let mut g = SplitMix64::new(a);
     let b = g.next_u64() ^ sensor as u64;
-    SplitMix64::new(b).next_u64()
+    let seed = SplitMix64::new(b).next_u64();
+    if realization == 0 {
+        seed
+    } else {
+        SplitMix64::new(seed ^ realization).next_u64()
+    }
 }
 
 /// `clean` plus white Gaussian noise whose power over `window` is the window's
@@ -357,10 +369,13 @@ mod tests {
 
     #[test]
     fn noise_seeds_differ_by_case_and_sensor() {
-        let a = noise_seed(1, 5, 0);
-        assert_eq!(a, noise_seed(1, 5, 0));
-        assert_ne!(a, noise_seed(1, 6, 0));
-        assert_ne!(a, noise_seed(1, 5, 1));
-        assert_ne!(a, noise_seed(2, 5, 0));
+        let a = noise_seed(1, 5, 0, 0);
+        assert_eq!(a, noise_seed(1, 5, 0, 0));
+        assert_ne!(a, noise_seed(1, 6, 0, 0));
+        assert_ne!(a, noise_seed(1, 5, 1, 0));
+        assert_ne!(a, noise_seed(2, 5, 0, 0));
+        let realizations: std::collections::BTreeSet<u64> =
+            (0..64).map(|r| noise_seed(1, 5, 0, r)).collect();
+        assert_eq!(realizations.len(), 64);
     }
 }

@@ -281,6 +281,234 @@ fn prepare_dense<S: OdeSystem>(
     StepOutcome::Done
 }
 
+/// The state of an adaptive run carried from step to step: where it stands, the step
+/// size to try, the controller's and the stiffness test's history.
+struct Run<'t> {
+    tab: &'t ExplicitTableau,
+    tol: Tolerance,
+    w: Workspace,
+    stats: Stats,
+    control: StepController,
+    chatter: ChatterWatch,
+    /// Hairer's stiffness test, when the run is to stop on stiffness.
+    stiffness: Option<StiffnessTest>,
+    /// Whether regime switches are located.
+    events: bool,
+    /// Time at the start of the current step (s).
+    t: f64,
+    /// Step size to try (s).
+    h: f64,
+    /// Switching margin at the start of the current step (≥ 0).
+    start_margin: f64,
+    /// The last model failure of a rejected step, reported if the step size underflows.
+    model_failure: Option<SolveError>,
+}
+
+impl<'t> Run<'t> {
+    /// Starts a run of `tab` at `(p.t0, p.y0)`: holds the regime when events are
+    /// located, serves the samples at `p.t0`, evaluates the first stage and picks the
+    /// first step size.
+    fn start<S, O>(
+        sys: &mut S,
+        p: &Problem<'_>,
+        (tab, tol): (&'t ExplicitTableau, Tolerance),
+        stiffness_test: bool,
+        samples: &mut Samples<'_, O>,
+    ) -> Result<Self, SolveError>
+    where
+        S: OdeSystem,
+        O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
+    {
+        let mut w = Workspace::new(p.y0, tab);
+        let n = w.n;
+        let mut stats = Stats::default();
+        let stiffness =
+            (stiffness_test && tab.stiffness_bound > 0.0).then(|| StiffnessTest::new(tab));
+        let events = p.locate_events
+            && sys
+                .hold_regime(p.t0, p.y0)
+                .map_err(|source| SolveError::Model { t: p.t0, source })?;
+        samples.serve_start(sys, p.t0, p.y0)?;
+        eval(sys, p.t0, p.y0, &mut w.k[..n], &mut stats)?;
+        let start_margin = sys.margin();
+        let h = initial_step(
+            sys,
+            p,
+            tab.order,
+            tol,
+            &w.k[..n],
+            (&mut w.scratch, &mut w.out),
+            &mut stats,
+        )?;
+        Ok(Self {
+            tab,
+            tol,
+            w,
+            stats,
+            control: StepController::new(tab.error_order, tab.pi_beta),
+            chatter: ChatterWatch::default(),
+            stiffness,
+            events,
+            t: p.t0,
+            h,
+            start_margin,
+            model_failure: None,
+        })
+    }
+
+    /// Takes a step of size `self.h` (s) and judges its error: the next step size
+    /// (s) if accepted; if rejected, `None` with the smaller step size in `self.h`.
+    #[inline]
+    fn attempt<S: OdeSystem>(&mut self, sys: &mut S) -> Option<f64> {
+        let (tab, h) = (self.tab, self.h);
+        self.w.margins.fill(f64::INFINITY);
+        let err = match take_step(sys, tab, (self.t, h), &mut self.w, &mut self.stats) {
+            StepOutcome::NonFinite { .. } => f64::NAN,
+            StepOutcome::ModelFailed(e) => {
+                self.model_failure = Some(e);
+                f64::NAN
+            }
+            StepOutcome::Done => error_norm(tab, self.tol, h, &mut self.w),
+        };
+        match self.control.judge(err, h) {
+            Verdict::Reject(h_new) => {
+                self.stats.rejected += 1;
+                self.h = h_new;
+                None
+            }
+            Verdict::Accept(h_new) => Some(h_new),
+        }
+    }
+
+    /// Prepares the continuous extension of the accepted step ([`prepare_dense`]);
+    /// false when a trial state of its extra stages fails, which makes the step a
+    /// rejected one with the step size cut by [`NON_FINITE_CUT`].
+    #[inline]
+    fn extend<S: OdeSystem>(&mut self, sys: &mut S) -> bool {
+        let Some(dense) = self.tab.dense.as_ref() else {
+            return true;
+        };
+        let at = (self.t, self.h);
+        match prepare_dense(sys, self.tab, dense, at, &mut self.w, &mut self.stats) {
+            StepOutcome::Done => true,
+            failed => {
+                if let StepOutcome::ModelFailed(e) = failed {
+                    self.model_failure = Some(e);
+                }
+                self.stats.rejected += 1;
+                self.control.note_failure();
+                self.h *= NON_FINITE_CUT;
+                false
+            }
+        }
+    }
+
+    /// Ends the accepted step of size `self.h` (s) at `t_end` ([`end_step`]): with
+    /// `crossed`, the switch is located on the step's continuous extension; the
+    /// samples up to the step's end (or the switch) are served. Returns the switch's
+    /// fraction of the step.
+    #[inline]
+    fn end_step<S, O>(
+        &mut self,
+        sys: &mut S,
+        samples: &mut Samples<'_, O>,
+        t_end: f64,
+        crossed: bool,
+    ) -> Result<Option<f64>, SolveError>
+    where
+        S: OdeSystem,
+        O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
+    {
+        let (t, h, tab) = (self.t, self.h, self.tab);
+        let (n, s) = (self.w.n, tab.stages());
+        let Workspace {
+            k,
+            y,
+            y_new,
+            out,
+            f_end,
+            cont,
+            margins,
+            y_event,
+            ..
+        } = &mut self.w;
+        let ends = StepEnds {
+            t0: t,
+            h,
+            y0: y,
+            y1: y_new,
+            f0: &k[..n],
+            f1: &k[(s - 1) * n..s * n],
+        };
+        let nodes = tab.c.iter().chain(tab.dense.iter().flat_map(|d| d.c));
+        let nodes = nodes.copied().zip(margins.iter().copied()).skip(1);
+        end_step(
+            sys,
+            samples,
+            (t, h, t_end),
+            |theta, y| ends.continuous(theta, cont, y),
+            crossed.then_some((self.start_margin, nodes)),
+            (y_new, y_event, f_end, out),
+            &mut self.stats,
+        )
+    }
+
+    /// The state at the switch located at fraction `theta` of the step of size
+    /// `self.h` (s), into `w.y`, with the new regime held; returns the switch's time
+    /// (s). The new regime is the one of the located state just past it (where the
+    /// crossing was seen); the state there comes from a step of the pair's full
+    /// order from `t` (the continuous extension is an order lower, which at tight
+    /// tolerances would dominate the error), taken in the held regime, in which the
+    /// trajectory is smooth up to the switch.
+    fn state_at_event<S: OdeSystem>(&mut self, sys: &mut S, theta: f64) -> Result<f64, SolveError> {
+        let tol = self.tol;
+        self.stats.events += 1;
+        let h_event = theta * self.h;
+        let t_new = self.t + h_event;
+        let w = &mut self.w;
+        let redone = take_step(sys, self.tab, (self.t, h_event), w, &mut self.stats);
+        if self.chatter.step(true) {
+            settle(
+                sys,
+                (t_new, &w.y_event),
+                (tol.rtol, tol.atol),
+                &mut self.stats,
+            );
+        }
+        sys.hold_regime(t_new, &w.y_event)
+            .map_err(|source| SolveError::Model { t: t_new, source })?;
+        if let StepOutcome::Done = redone {
+            w.y_event.copy_from_slice(&w.y_new);
+        }
+        std::mem::swap(&mut w.y, &mut w.y_event);
+        Ok(t_new)
+    }
+
+    /// Goes on from the state in `w.y` at `t_new` (s) with the step size `h_new`
+    /// (s): after a switch with a fresh first stage, otherwise with the last stage
+    /// of the step just taken (FSAL).
+    #[inline]
+    fn go_on<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        (t_new, h_new): (f64, f64),
+        at_event: bool,
+    ) -> Result<(), SolveError> {
+        let (n, s) = (self.w.n, self.tab.stages());
+        if at_event {
+            eval(sys, t_new, &self.w.y, &mut self.w.k[..n], &mut self.stats)?;
+            self.start_margin = sys.margin();
+        } else {
+            self.chatter.step(false);
+            self.start_margin = self.w.margins[s - 1];
+            self.w.k.copy_within((s - 1) * n..s * n, 0);
+        }
+        self.t = t_new;
+        self.h = h_new;
+        Ok(())
+    }
+}
+
 /// An adaptive FSAL pair given by `tab`: PI step control on the embedded estimate
 /// (exponent from `tab.error_order`, gain `tab.pi_beta`), `s − 1` evaluations of
 /// `f` per attempted step plus 2 at the start, and the pair's continuous extension
@@ -317,157 +545,43 @@ where
     O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
 {
     debug_assert!(tab.fsal && !tab.e.is_empty());
-    let s = tab.stages();
-    let mut w = Workspace::new(p.y0, tab);
-    let n = w.n;
-    let mut stats = Stats::default();
-    let mut stiffness =
-        (stiffness_test && tab.stiffness_bound > 0.0).then(|| StiffnessTest::new(tab));
-    let events = p.locate_events
-        && sys
-            .hold_regime(p.t0, p.y0)
-            .map_err(|source| SolveError::Model { t: p.t0, source })?;
-    samples.serve_start(sys, p.t0, p.y0)?;
-    eval(sys, p.t0, p.y0, &mut w.k[..n], &mut stats)?;
-    // Switching margin at the start of the current step (≥ 0).
-    let mut start_margin = sys.margin();
-    let mut h = initial_step(
-        sys,
-        p,
-        tab.order,
-        tol,
-        &w.k[..n],
-        (&mut w.scratch, &mut w.out),
-        &mut stats,
-    )?;
-    let mut control = StepController::new(tab.error_order, tab.pi_beta);
-    let mut chatter = ChatterWatch::default();
-    let mut t = p.t0;
-    // The last model failure of a rejected step, reported if the step size underflows.
-    let mut model_failure: Option<SolveError> = None;
+    let mut run = Run::start(sys, p, (tab, tol), stiffness_test, samples)?;
     loop {
-        let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
-        h = h_try;
-        w.margins.fill(f64::INFINITY);
-        let err = match take_step(sys, tab, (t, h), &mut w, &mut stats) {
-            StepOutcome::NonFinite { .. } => f64::NAN,
-            StepOutcome::ModelFailed(e) => {
-                model_failure = Some(e);
-                f64::NAN
-            }
-            StepOutcome::Done => error_norm(tab, tol, h, &mut w),
-        };
-        let h_new = match control.judge(err, h) {
-            Verdict::Reject(h_new) => {
-                stats.rejected += 1;
-                h = h_new;
-                continue;
-            }
-            Verdict::Accept(h_new) => h_new,
-        };
-        let t_end = if last { p.t_end } else { t + h };
-        // Stage 0 is the step's start, in the regime by construction.
-        let crossed = events && w.margins[1..].iter().any(|&m| m < 0.0);
-        let need_dense = crossed || samples.pending_before(t_end);
-        if let Some(dense) = tab.dense.as_ref().filter(|_| need_dense) {
-            match prepare_dense(sys, tab, dense, (t, h), &mut w, &mut stats) {
-                StepOutcome::Done => {}
-                failed => {
-                    if let StepOutcome::ModelFailed(e) = failed {
-                        model_failure = Some(e);
-                    }
-                    stats.rejected += 1;
-                    control.note_failure();
-                    h *= NON_FINITE_CUT;
-                    continue;
-                }
-            }
-        }
-        stats.steps += 1;
-        model_failure = None;
-        let stiff = stiffness
-            .as_mut()
-            .is_some_and(|test| test.accepted(tab, h, &w.k));
-        let event = {
-            let Workspace {
-                k,
-                y,
-                y_new,
-                out,
-                f_end,
-                cont,
-                margins,
-                y_event,
-                ..
-            } = &mut w;
-            let ends = StepEnds {
-                t0: t,
-                h,
-                y0: y,
-                y1: y_new,
-                f0: &k[..n],
-                f1: &k[(s - 1) * n..s * n],
-            };
-            let nodes = tab.c.iter().chain(tab.dense.iter().flat_map(|d| d.c));
-            let nodes = nodes.copied().zip(margins.iter().copied()).skip(1);
-            end_step(
-                sys,
-                samples,
-                (t, h, t_end),
-                |theta, y| ends.continuous(theta, cont, y),
-                crossed.then_some((start_margin, nodes)),
-                (y_new, y_event, f_end, out),
-                &mut stats,
-            )?
-        };
-        let Some(theta) = event else {
-            chatter.step(false);
-            start_margin = w.margins[s - 1];
-            if last {
-                return Ok(Finish::Done(stats));
-            }
-            std::mem::swap(&mut w.y, &mut w.y_new);
-            if stiff {
-                return Ok(Finish::Stiff {
-                    t: t_end,
-                    y: w.y.clone(),
-                    stats,
-                });
-            }
-            w.k.copy_within((s - 1) * n..s * n, 0);
-            t = t_end;
-            h = h_new;
+        let (h, last) = next_step(run.t, run.h, p, &run.stats, &mut run.model_failure)?;
+        run.h = h;
+        let Some(h_new) = run.attempt(sys) else {
             continue;
         };
-        // The switch. The new regime is the one of the located state just past it
-        // (where the crossing was seen); the state there comes from a step of the
-        // pair's full order from `t` (the continuous extension is an order lower,
-        // which at tight tolerances would dominate the error), taken in the held
-        // regime, in which the trajectory is smooth up to the switch.
-        stats.events += 1;
-        let h_event = theta * h;
-        let t_new = t + h_event;
-        let redone = take_step(sys, tab, (t, h_event), &mut w, &mut stats);
-        if chatter.step(true) {
-            settle(sys, (t_new, &w.y_event), (tol.rtol, tol.atol), &mut stats);
+        let t_end = if last { p.t_end } else { run.t + h };
+        // Stage 0 is the step's start, in the regime by construction.
+        let crossed = run.events && run.w.margins[1..].iter().any(|&m| m < 0.0);
+        let need_dense = crossed || samples.pending_before(t_end);
+        if need_dense && !run.extend(sys) {
+            continue;
         }
-        sys.hold_regime(t_new, &w.y_event)
-            .map_err(|source| SolveError::Model { t: t_new, source })?;
-        if let StepOutcome::Done = redone {
-            w.y_event.copy_from_slice(&w.y_new);
-        }
-        std::mem::swap(&mut w.y, &mut w.y_event);
+        run.stats.steps += 1;
+        run.model_failure = None;
+        let stiff = run
+            .stiffness
+            .as_mut()
+            .is_some_and(|test| test.accepted(tab, h, &run.w.k));
+        let event = run.end_step(sys, samples, t_end, crossed)?;
+        let t_new = match event {
+            Some(theta) => run.state_at_event(sys, theta)?,
+            None if last => return Ok(Finish::Done(run.stats)),
+            None => {
+                std::mem::swap(&mut run.w.y, &mut run.w.y_new);
+                t_end
+            }
+        };
         if stiff {
             return Ok(Finish::Stiff {
                 t: t_new,
-                y: w.y.clone(),
-                stats,
+                y: run.w.y.clone(),
+                stats: run.stats,
             });
         }
-        eval(sys, t_new, &w.y, &mut w.k[..n], &mut stats)?;
-        start_margin = sys.margin();
-        t = t_new;
-        h = h_new;
+        run.go_on(sys, (t_new, h_new), event.is_some())?;
     }
 }
 

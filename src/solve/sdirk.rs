@@ -188,6 +188,101 @@ enum StageOutcome {
     ModelFailed(SolveError),
 }
 
+impl Workspace {
+    /// The known part `r = Σ_{j<i} a_ij h k_j` of stage `i`'s equation into `r`, and
+    /// Newton's starting increment `z = r + γ h k_{i−1}` into `z` (the previous
+    /// stage's slope; the step's start slope for `i = 0`), for a step of size `h` (s).
+    #[inline]
+    fn predict(&mut self, tab: &SdirkTableau, h: f64, i: usize) {
+        let n = self.n;
+        let done = &self.hk[..i * n];
+        for m in 0..n {
+            let acc: f64 = (0..i).map(|j| tab.a[i][j] * done[j * n + m]).sum();
+            self.r[m] = acc;
+            let slope = if i == 0 {
+                h * self.f_cur[m]
+            } else {
+                done[(i - 1) * n + m]
+            };
+            self.z[m] = acc + tab.gamma * slope;
+        }
+    }
+
+    /// Solves stage `i` of a step of size `h` (s) from `(t, y)` by simplified Newton
+    /// from the prediction in `z`, with the factored iteration matrix in `lu`, and
+    /// stores its scaled slope `h k_i = (z − r)/γ` (state units). `eta` is Hairer's
+    /// convergence-rate memory `η = θ/(1−θ)`: it starts this stage's first
+    /// convergence test and takes the stage's last rate when it converges. Converged
+    /// carries the stage's worst contraction rate θ.
+    #[inline]
+    fn solve_stage<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        tab: &SdirkTableau,
+        tol: Tolerance,
+        (t, h, i): (f64, f64, usize),
+        eta: &mut f64,
+        stats: &mut Stats,
+    ) -> StageOutcome {
+        let (n, g) = (self.n, tab.gamma);
+        let ti = t + tab.c[i] * h;
+        let mut theta_max: f64 = 0.0;
+        let mut eta_i = eta.max(f64::EPSILON).powf(0.8);
+        let mut dn_prev = 0.0;
+        let mut converged = false;
+        for it in 0..MAX_NEWTON {
+            for m in 0..n {
+                self.stage[m] = self.y[m] + self.z[m];
+            }
+            if first_non_finite(&self.stage).is_some() {
+                return StageOutcome::NonFinite;
+            }
+            if let Err(e) = eval(sys, ti, &self.stage, &mut self.f_eval, stats) {
+                return StageOutcome::ModelFailed(e);
+            }
+            self.margins[i] = sys.margin();
+            for m in 0..n {
+                self.delta[m] = self.r[m] + h * g * self.f_eval[m] - self.z[m];
+            }
+            self.lu.solve_in_place(&mut self.delta, &mut self.scratch);
+            if first_non_finite(&self.delta).is_some() {
+                return StageOutcome::NonFinite;
+            }
+            for (z, d) in self.z.iter_mut().zip(&self.delta) {
+                *z += d;
+            }
+            let dn = tol.norm(&self.delta, &self.y, &self.y);
+            if it > 0 {
+                let theta = dn / dn_prev;
+                if theta >= 1.0 {
+                    return StageOutcome::Diverged;
+                }
+                theta_max = theta_max.max(theta);
+                eta_i = theta / (1.0 - theta);
+                // Hairer's forecast: would the remaining iterations suffice?
+                let left = MAX_NEWTON - 1 - it;
+                if left > 0 && theta.powi(left as i32 - 1) / (1.0 - theta) * dn > KAPPA {
+                    return StageOutcome::Diverged;
+                }
+            }
+            if eta_i * dn <= KAPPA {
+                converged = true;
+                break;
+            }
+            dn_prev = dn;
+        }
+        if !converged {
+            return StageOutcome::Diverged;
+        }
+        *eta = eta_i;
+        let hk_i = &mut self.hk[i * n..(i + 1) * n];
+        for ((hk, z), r) in hk_i.iter_mut().zip(&self.z).zip(&self.r) {
+            *hk = (z - r) / g;
+        }
+        StageOutcome::Converged { theta_max }
+    }
+}
+
 /// Solves the stage equations of a step of size `h` (s) from `(t, w.y)` with the
 /// factored iteration matrix in `w.lu`. `eta` carries Hairer's convergence-rate
 /// memory `η = θ/(1−θ)` from stage to stage and step to step.
@@ -199,78 +294,275 @@ fn solve_stages<S: OdeSystem>(
     w: &mut Workspace,
     eta: &mut f64,
     stats: &mut Stats,
-) -> Result<StageOutcome, SolveError> {
-    let n = w.n;
-    let g = tab.gamma;
+) -> StageOutcome {
     let mut theta_max: f64 = 0.0;
     for i in 0..tab.stages() {
-        let (done, rest) = w.hk.split_at_mut(i * n);
-        let hk_i = &mut rest[..n];
-        for m in 0..n {
-            let acc: f64 = (0..i).map(|j| tab.a[i][j] * done[j * n + m]).sum();
-            w.r[m] = acc;
-            // Predictor: the previous stage's slope (the step's start slope for i = 0).
-            let slope = if i == 0 {
-                h * w.f_cur[m]
-            } else {
-                done[(i - 1) * n + m]
-            };
-            w.z[m] = acc + g * slope;
-        }
-        let ti = t + tab.c[i] * h;
-        let mut eta_i = eta.max(f64::EPSILON).powf(0.8);
-        let mut dn_prev = 0.0;
-        let mut converged = false;
-        for it in 0..MAX_NEWTON {
-            for m in 0..n {
-                w.stage[m] = w.y[m] + w.z[m];
-            }
-            if first_non_finite(&w.stage).is_some() {
-                return Ok(StageOutcome::NonFinite);
-            }
-            if let Err(e) = eval(sys, ti, &w.stage, &mut w.f_eval, stats) {
-                return Ok(StageOutcome::ModelFailed(e));
-            }
-            w.margins[i] = sys.margin();
-            for m in 0..n {
-                w.delta[m] = w.r[m] + h * g * w.f_eval[m] - w.z[m];
-            }
-            w.lu.solve_in_place(&mut w.delta, &mut w.scratch);
-            if first_non_finite(&w.delta).is_some() {
-                return Ok(StageOutcome::NonFinite);
-            }
-            for (z, d) in w.z.iter_mut().zip(&w.delta) {
-                *z += d;
-            }
-            let dn = tol.norm(&w.delta, &w.y, &w.y);
-            if it > 0 {
-                let theta = dn / dn_prev;
-                if theta >= 1.0 {
-                    return Ok(StageOutcome::Diverged);
-                }
-                theta_max = theta_max.max(theta);
-                eta_i = theta / (1.0 - theta);
-                // Hairer's forecast: would the remaining iterations suffice?
-                let left = MAX_NEWTON - 1 - it;
-                if left > 0 && theta.powi(left as i32 - 1) / (1.0 - theta) * dn > KAPPA {
-                    return Ok(StageOutcome::Diverged);
-                }
-            }
-            if eta_i * dn <= KAPPA {
-                converged = true;
-                break;
-            }
-            dn_prev = dn;
-        }
-        if !converged {
-            return Ok(StageOutcome::Diverged);
-        }
-        *eta = eta_i;
-        for ((hk, z), r) in hk_i.iter_mut().zip(&w.z).zip(&w.r) {
-            *hk = (z - r) / g;
+        w.predict(tab, h, i);
+        match w.solve_stage(sys, tab, tol, (t, h, i), eta, stats) {
+            StageOutcome::Converged { theta_max: stage } => theta_max = theta_max.max(stage),
+            failed => return failed,
         }
     }
-    Ok(StageOutcome::Converged { theta_max })
+    StageOutcome::Converged { theta_max }
+}
+
+/// The state of an SDIRK4 run carried from step to step: where it stands, the step
+/// size to try, and what later steps reuse (Jacobian, LU factors, Newton's rate
+/// memory, the controller's history).
+struct Run<'t> {
+    tab: &'t SdirkTableau,
+    tol: Tolerance,
+    w: Workspace,
+    stats: Stats,
+    control: StepController,
+    chatter: ChatterWatch,
+    /// Whether regime switches are located.
+    events: bool,
+    /// Time at the start of the current step (s).
+    t: f64,
+    /// Step size to try (s).
+    h: f64,
+    /// Hairer's convergence-rate memory `η = θ/(1−θ)`.
+    eta: f64,
+    /// Whether the next attempt evaluates a fresh Jacobian.
+    need_jac: bool,
+    /// Whether the Jacobian was evaluated at the current (t, y).
+    jac_current: bool,
+    /// Step size of the current LU factors (s; NaN: none valid).
+    h_factored: f64,
+    /// Switching margin at the start of the current step (≥ 0 when events are located).
+    start_margin: f64,
+    /// The last model failure of a rejected step, reported if the step size underflows.
+    model_failure: Option<SolveError>,
+}
+
+impl<'t> Run<'t> {
+    /// Starts a run of `tab` at `(p.t0, p.y0)` with the work `stats` done before:
+    /// holds the regime when events are located, serves the samples at `p.t0`,
+    /// evaluates the start slope and picks the first step size.
+    fn start<S, O>(
+        sys: &mut S,
+        p: &Problem<'_>,
+        (tab, tol): (&'t SdirkTableau, Tolerance),
+        samples: &mut Samples<'_, O>,
+        stats: Stats,
+    ) -> Result<Self, SolveError>
+    where
+        S: OdeSystem,
+        O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
+    {
+        let mut w = Workspace::new(p.y0, tab.stages());
+        let mut stats = stats;
+        let events = p.locate_events
+            && sys
+                .hold_regime(p.t0, p.y0)
+                .map_err(|source| SolveError::Model { t: p.t0, source })?;
+        samples.serve_start(sys, p.t0, p.y0)?;
+        eval(sys, p.t0, p.y0, &mut w.f_cur, &mut stats)?;
+        let start_margin = sys.margin();
+        let h = initial_step(
+            sys,
+            p,
+            tab.order,
+            tol,
+            &w.f_cur,
+            (&mut w.stage, &mut w.f_eval),
+            &mut stats,
+        )?;
+        Ok(Self {
+            tab,
+            tol,
+            w,
+            stats,
+            control: StepController::new(tab.embedded_order, 0.0),
+            chatter: ChatterWatch::default(),
+            events,
+            t: p.t0,
+            h,
+            eta: 1.0,
+            need_jac: true,
+            jac_current: false,
+            h_factored: f64::NAN,
+            start_margin,
+            model_failure: None,
+        })
+    }
+
+    /// Attempts a step of size `self.h` (s): a fresh Jacobian if one is needed, the
+    /// iteration matrix factored unless its factors are for this step size, then
+    /// the stage equations.
+    #[inline]
+    fn attempt<S: OdeSystem>(&mut self, sys: &mut S) -> Result<StageOutcome, SolveError> {
+        if self.need_jac {
+            self.w.jacobian(sys, self.t, &mut self.stats)?;
+            self.need_jac = false;
+            self.jac_current = true;
+            self.h_factored = f64::NAN;
+        }
+        self.w.margins.fill(f64::INFINITY);
+        let h = self.h;
+        if h == self.h_factored || self.w.factor(h * self.tab.gamma, &mut self.stats) {
+            self.h_factored = h;
+            let (tab, tol) = (self.tab, self.tol);
+            let at = (self.t, h);
+            Ok(solve_stages(
+                sys,
+                tab,
+                tol,
+                at,
+                &mut self.w,
+                &mut self.eta,
+                &mut self.stats,
+            ))
+        } else {
+            self.h_factored = f64::NAN;
+            Ok(StageOutcome::Diverged)
+        }
+    }
+
+    /// Judges the converged step of size `self.h` (s) on its embedded estimate
+    /// filtered through `(I − hγJ)⁻¹`: the next step size (s) if accepted; if
+    /// rejected, `None` with the smaller step size in `self.h`.
+    #[inline]
+    fn judge(&mut self) -> Option<f64> {
+        let w = &mut self.w;
+        w.finish_step(self.tab, self.h);
+        w.lu.solve_in_place(&mut w.delta, &mut w.scratch);
+        let err = self.tol.norm(&w.delta, &w.y, &w.y_new);
+        match self.control.judge(err, self.h) {
+            Verdict::Reject(h_new) => {
+                self.stats.rejected += 1;
+                self.h = h_new;
+                None
+            }
+            Verdict::Accept(h_new) => {
+                self.stats.steps += 1;
+                Some(h_new)
+            }
+        }
+    }
+
+    /// Counts a failed attempt and cuts the step size by the factor `cut`; the next
+    /// attempt gets a fresh Jacobian unless this one had it.
+    #[inline]
+    fn fail(&mut self, cut: f64) {
+        self.stats.rejected += 1;
+        self.control.note_failure();
+        self.h *= cut;
+        if !self.jac_current {
+            self.need_jac = true;
+        }
+    }
+
+    /// Ends the accepted step of size `self.h` (s) at `t_new` ([`end_step`]): the
+    /// switch is located on the step's Hermite interpolant when a stage crossed one,
+    /// and the samples up to the step's end (or the switch) are served. Returns the
+    /// switch's fraction of the step.
+    #[inline]
+    fn end_step<S, O>(
+        &mut self,
+        sys: &mut S,
+        samples: &mut Samples<'_, O>,
+        t_new: f64,
+    ) -> Result<Option<f64>, SolveError>
+    where
+        S: OdeSystem,
+        O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
+    {
+        let (t, h) = (self.t, self.h);
+        let crossed = self.events && self.w.margins.iter().any(|&m| m < 0.0);
+        let Workspace {
+            y,
+            y_new,
+            f_cur,
+            f_end,
+            f_eval,
+            out,
+            margins,
+            y_event,
+            ..
+        } = &mut self.w;
+        let ends = StepEnds {
+            t0: t,
+            h,
+            y0: y,
+            y1: y_new,
+            f0: f_cur,
+            f1: f_end,
+        };
+        let nodes = self.tab.c.iter().copied().zip(margins.iter().copied());
+        end_step(
+            sys,
+            samples,
+            (t, h, t_new),
+            |theta, y| ends.hermite(theta, y),
+            crossed.then_some((self.start_margin, nodes)),
+            (y_new, y_event, f_eval, out),
+            &mut self.stats,
+        )
+    }
+
+    /// Restarts the run at the switch located at fraction `theta` of the step of
+    /// size `self.h` (s): the state there from an SDIRK4 step ending on it in the
+    /// held regime (the Hermite interpolant if that step fails), then the new
+    /// regime, a fresh Jacobian and the step size `h_new` (s).
+    fn restart_at_event<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        theta: f64,
+        h_new: f64,
+    ) -> Result<(), SolveError> {
+        let (tab, tol) = (self.tab, self.tol);
+        let w = &mut self.w;
+        self.stats.events += 1;
+        let h_event = theta * self.h;
+        if w.factor(h_event * tab.gamma, &mut self.stats) {
+            let redone = (self.t, h_event);
+            if let StageOutcome::Converged { .. } =
+                solve_stages(sys, tab, tol, redone, w, &mut self.eta, &mut self.stats)
+            {
+                w.finish_step(tab, h_event);
+                w.y_event.copy_from_slice(&w.y_new);
+            }
+        }
+        self.t += h_event;
+        let t = self.t;
+        if self.chatter.step(true) {
+            settle(sys, (t, &w.y_event), (tol.rtol, tol.atol), &mut self.stats);
+        }
+        sys.hold_regime(t, &w.y_event)
+            .map_err(|source| SolveError::Model { t, source })?;
+        std::mem::swap(&mut w.y, &mut w.y_event);
+        eval(sys, t, &w.y, &mut w.f_cur, &mut self.stats)?;
+        self.start_margin = sys.margin();
+        self.model_failure = None;
+        self.need_jac = true;
+        self.jac_current = false;
+        self.h_factored = f64::NAN;
+        self.h = h_new;
+        Ok(())
+    }
+
+    /// Moves the run to the end `t_new` (s) of the accepted step with no switch in
+    /// it: a fresh Jacobian when Newton's worst rate `theta_max` says so, and the
+    /// proposed step size `h_new` (s) unless it would only grow a little (which
+    /// keeps the LU factors).
+    #[inline]
+    fn advance(&mut self, t_new: f64, theta_max: f64, h_new: f64) {
+        let w = &mut self.w;
+        self.chatter.step(false);
+        self.start_margin = w.margins[self.tab.stages() - 1];
+        std::mem::swap(&mut w.y, &mut w.y_new);
+        std::mem::swap(&mut w.f_cur, &mut w.f_end);
+        self.t = t_new;
+        self.model_failure = None;
+        self.need_jac = theta_max > THETA_REUSE;
+        self.jac_current = false;
+        let ratio = h_new / self.h;
+        if self.need_jac || !(1.0..=KEEP_STEP_UP_TO).contains(&ratio) {
+            self.h = h_new;
+        }
+    }
 }
 
 /// Adaptive SDIRK4: the embedded order-3 estimate drives a step factor
@@ -303,174 +595,43 @@ where
     S: OdeSystem,
     O: FnMut(&mut S, f64, &[f64]) -> Result<(), ModelError>,
 {
-    let tab = &SDIRK4;
-    let s = tab.stages();
-    let mut w = Workspace::new(p.y0, s);
-    let mut stats = stats;
-    let events = p.locate_events
-        && sys
-            .hold_regime(p.t0, p.y0)
-            .map_err(|source| SolveError::Model { t: p.t0, source })?;
-    samples.serve_start(sys, p.t0, p.y0)?;
-    eval(sys, p.t0, p.y0, &mut w.f_cur, &mut stats)?;
-    // Switching margin at the start of the current step (≥ 0 when events are located).
-    let mut start_margin = sys.margin();
-    let mut chatter = ChatterWatch::default();
-    let mut h = initial_step(
-        sys,
-        p,
-        tab.order,
-        tol,
-        &w.f_cur,
-        (&mut w.stage, &mut w.f_eval),
-        &mut stats,
-    )?;
-    let mut control = StepController::new(tab.embedded_order, 0.0);
-    let mut eta = 1.0;
-    let mut need_jac = true;
-    // Whether the Jacobian was evaluated at the current (t, y).
-    let mut jac_current = false;
-    // Step size of the current LU factors (NaN: none valid).
-    let mut h_factored = f64::NAN;
-    let mut t = p.t0;
-    // The last model failure of a rejected step, reported if the step size underflows.
-    let mut model_failure: Option<SolveError> = None;
+    let mut run = Run::start(sys, p, (&SDIRK4, tol), samples, stats)?;
     loop {
-        let (h_try, last) = next_step(t, h, p, &stats, &mut model_failure)?;
-        h = h_try;
+        let t = run.t;
+        let (h, last) = next_step(t, run.h, p, &run.stats, &mut run.model_failure)?;
+        run.h = h;
         let landing = samples
             .next_time()
             .filter(|&ts| land_on_samples && !last && ts > t + LANDING_MIN * h && ts < t + h);
         if let Some(ts) = landing {
-            h = ts - t;
+            run.h = ts - t;
         }
-        if need_jac {
-            w.jacobian(sys, t, &mut stats)?;
-            need_jac = false;
-            jac_current = true;
-            h_factored = f64::NAN;
-        }
-        w.margins.fill(f64::INFINITY);
-        let outcome = if h == h_factored || w.factor(h * tab.gamma, &mut stats) {
-            h_factored = h;
-            solve_stages(sys, tab, tol, (t, h), &mut w, &mut eta, &mut stats)?
-        } else {
-            h_factored = f64::NAN;
-            StageOutcome::Diverged
-        };
-        let cut = match outcome {
+        let cut = match run.attempt(sys)? {
             StageOutcome::Converged { theta_max } => {
-                w.finish_step(tab, h);
-                w.lu.solve_in_place(&mut w.delta, &mut w.scratch);
-                let err = tol.norm(&w.delta, &w.y, &w.y_new);
-                match control.judge(err, h) {
-                    Verdict::Reject(h_new) => {
-                        stats.rejected += 1;
-                        h = h_new;
-                        continue;
-                    }
-                    Verdict::Accept(h_new) => {
-                        stats.steps += 1;
-                        let t_new = if last {
-                            p.t_end
-                        } else {
-                            landing.unwrap_or(t + h)
-                        };
-                        let crossed = events && w.margins.iter().any(|&m| m < 0.0);
-                        let event = {
-                            let Workspace {
-                                y,
-                                y_new,
-                                f_cur,
-                                f_end,
-                                f_eval,
-                                out,
-                                margins,
-                                y_event,
-                                ..
-                            } = &mut w;
-                            let ends = StepEnds {
-                                t0: t,
-                                h,
-                                y0: y,
-                                y1: y_new,
-                                f0: f_cur,
-                                f1: f_end,
-                            };
-                            let nodes = tab.c.iter().copied().zip(margins.iter().copied());
-                            end_step(
-                                sys,
-                                samples,
-                                (t, h, t_new),
-                                |theta, y| ends.hermite(theta, y),
-                                crossed.then_some((start_margin, nodes)),
-                                (y_new, y_event, f_eval, out),
-                                &mut stats,
-                            )?
-                        };
-                        if let Some(theta) = event {
-                            // The switch: the state there from an SDIRK4 step ending on
-                            // it in the held regime (the Hermite interpolant if that
-                            // step fails), then the new regime and a fresh Jacobian.
-                            stats.events += 1;
-                            let h_event = theta * h;
-                            if w.factor(h_event * tab.gamma, &mut stats) {
-                                let redone = (t, h_event);
-                                if let StageOutcome::Converged { .. } = solve_stages(
-                                    sys, tab, tol, redone, &mut w, &mut eta, &mut stats,
-                                )? {
-                                    w.finish_step(tab, h_event);
-                                    w.y_event.copy_from_slice(&w.y_new);
-                                }
-                            }
-                            t += h_event;
-                            if chatter.step(true) {
-                                settle(sys, (t, &w.y_event), (tol.rtol, tol.atol), &mut stats);
-                            }
-                            sys.hold_regime(t, &w.y_event)
-                                .map_err(|source| SolveError::Model { t, source })?;
-                            std::mem::swap(&mut w.y, &mut w.y_event);
-                            eval(sys, t, &w.y, &mut w.f_cur, &mut stats)?;
-                            start_margin = sys.margin();
-                            model_failure = None;
-                            need_jac = true;
-                            jac_current = false;
-                            h_factored = f64::NAN;
-                            h = h_new;
-                            continue;
-                        }
-                        chatter.step(false);
-                        start_margin = w.margins[s - 1];
-                        if last {
-                            return Ok(stats);
-                        }
-                        std::mem::swap(&mut w.y, &mut w.y_new);
-                        std::mem::swap(&mut w.f_cur, &mut w.f_end);
-                        t = t_new;
-                        model_failure = None;
-                        need_jac = theta_max > THETA_REUSE;
-                        jac_current = false;
-                        // Keep the LU factors if only a small increase is proposed.
-                        let ratio = h_new / h;
-                        if need_jac || !(1.0..=KEEP_STEP_UP_TO).contains(&ratio) {
-                            h = h_new;
-                        }
-                        continue;
-                    }
+                let Some(h_new) = run.judge() else {
+                    continue;
+                };
+                let t_new = if last {
+                    p.t_end
+                } else {
+                    landing.unwrap_or(t + run.h)
+                };
+                if let Some(theta) = run.end_step(sys, samples, t_new)? {
+                    run.restart_at_event(sys, theta, h_new)?;
+                } else if last {
+                    return Ok(run.stats);
+                } else {
+                    run.advance(t_new, theta_max, h_new);
                 }
+                continue;
             }
             StageOutcome::Diverged => NEWTON_FAIL_CUT,
             StageOutcome::NonFinite => NON_FINITE_CUT,
             StageOutcome::ModelFailed(e) => {
-                model_failure = Some(e);
+                run.model_failure = Some(e);
                 NON_FINITE_CUT
             }
         };
-        stats.rejected += 1;
-        control.note_failure();
-        h *= cut;
-        if !jac_current {
-            need_jac = true;
-        }
+        run.fail(cut);
     }
 }

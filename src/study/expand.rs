@@ -7,7 +7,7 @@ use serde_saphyr::Location;
 
 use super::config::{
     BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
-    Scalar, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
+    Scalar, SensorSection, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
 };
 use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -62,13 +62,7 @@ type Provenance = Vec<(&'static str, String, (u64, u64))>;
 /// settings, memory.
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
-    if let Some((place, field, message)) = super::tree::first_empty(text) {
-        return Err(ctx.err(Some(place), &field, message));
-    }
-    let file: GridFile = serde_saphyr::from_str(text).map_err(|e| {
-        let (place, field, message) = super::yaml::describe(&e, text);
-        ctx.err(place, &field, message)
-    })?;
+    let file = parse(&ctx, text)?;
     check_name(&ctx, &file.name)?;
     let sampling = sampling_of(&ctx, &file)?;
     let effects = effects(&ctx, &file)?;
@@ -80,34 +74,15 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let (total, count) = case_count(&ctx, &file, &groups, rows)?;
     // Before the design is drawn: its values are rows × parameters.
     let places = memory_check::Places::of(&file);
-    let mut known = memory_check::Known {
-        samples: sampling.len() as u64,
-        cases: total,
-        design_values: file.design.as_ref().map_or(0, |d| {
-            rows.saturating_mul(d.value.parameters.value.len() as u64)
-        }),
-        references: 0,
-        revolutions: 0,
-        speed_knots: memory_check::speed_knots(&file),
-    };
+    let mut known = known_before_expansion(&file, &sampling, total, rows);
     memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
-    let sampled = design::resolve(&ctx, &file, &base, &effects, &axes_names)?;
-    let mut resolved = resolve_axes(&ctx, &base, &groups, &effects)?;
-    check_repeats(&ctx, &resolved)?;
-    if let Some(d) = &sampled {
-        resolved.push(d.group());
-    }
-    let mut cases = Vec::with_capacity(total as usize);
-    expand_grid(&ctx, &base, &prov, &resolved, count, &effects, &mut cases)?;
-    let explicit_design = sampled.as_ref().map(|_| &resolved[resolved.len() - 1]);
-    expand_explicit(
+    let (mut cases, design) = expand_cases(
         &ctx,
         &file,
-        &base,
-        &prov,
-        explicit_design,
+        (&base, &prov),
         &effects,
-        &mut cases,
+        (&groups, &axes_names),
+        (total, count),
     )?;
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
@@ -115,6 +90,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         Some(list) => sensors::sensors(&ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
+    sensors::check_realizations(&ctx, &sensors, &cases)?;
     let analysed = (&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
     let envelope = file
@@ -125,11 +101,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
-    let revolutions = cases
-        .iter()
-        .map(|c| revolution_count(&c.params.drive(), transient, sampling.duration))
-        .max()
-        .unwrap_or(0);
+    let revolutions = most_revolutions(&cases, transient, sampling.duration);
     check_samples_per_revolution(&ctx, &file, revolutions, &sampling)?;
     known.references = references.len() as u64;
     known.revolutions = revolutions as u64;
@@ -152,24 +124,104 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         axes: axes_names,
         cases,
         references,
-        design: sampled.map(|d| d.info),
+        design,
         replicates,
         chaos_check,
         revolutions,
         sensors: Vec::new(),
         output: SeriesOutput::default(),
     };
-    if let Some(list) = &file.sensors {
-        let taken = super::study_layout(&study, &[], None)
+    let (list, output) = (file.sensors.as_ref(), file.output.as_ref());
+    add_outputs(&ctx, list, output, &mut study, sensors)?;
+    memory_check::check_study(&ctx, &places, &study, limits)?;
+    Ok(study)
+}
+
+/// The most whole revolutions of any of `cases` between `transient` and `duration` (s).
+fn most_revolutions(cases: &[Case], transient: f64, duration: f64) -> usize {
+    cases
+        .iter()
+        .map(|c| revolution_count(&c.params.drive(), transient, duration))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Adds the `sensors` of the file's `sensors:` list to `study`, their names checked
+/// against the study's other variables, and the series output settings of its
+/// `output:` section.
+fn add_outputs(
+    ctx: &Ctx<'_>,
+    list: Option<&S<Vec<S<SensorSection>>>>,
+    output: Option<&OutputSection>,
+    study: &mut Study,
+    sensors: Vec<Sensor>,
+) -> Result<(), StudyError> {
+    if let Some(list) = list {
+        let taken = super::study_layout(study, &[], None)
             .names()
             .map(str::to_string)
             .collect();
-        sensors::check_names(&ctx, list, &sensors, &taken)?;
+        sensors::check_names(ctx, list, &sensors, &taken)?;
         study.sensors = sensors;
     }
-    study.output = series_output(&ctx, file.output.as_ref(), &study)?;
-    memory_check::check_study(&ctx, &places, &study, limits)?;
-    Ok(study)
+    study.output = series_output(ctx, output, study)?;
+    Ok(())
+}
+
+/// The grid file parsed from `text`, its parser errors in the user's words
+/// ([`super::yaml::describe`]); an empty value is refused first, with its field.
+fn parse(ctx: &Ctx<'_>, text: &str) -> Result<GridFile, StudyError> {
+    if let Some((place, field, message)) = super::tree::first_empty(text) {
+        return Err(ctx.err(Some(place), &field, message));
+    }
+    serde_saphyr::from_str(text).map_err(|e| {
+        let (place, field, message) = super::yaml::describe(&e, text);
+        ctx.err(place, &field, message)
+    })
+}
+
+/// What is known of the study before its cases are expanded: `total` cases of the
+/// samples of `sampling`, a sampled design of `rows` rows, the longest speed table.
+fn known_before_expansion(
+    file: &GridFile,
+    sampling: &Sampling,
+    total: u64,
+    rows: u64,
+) -> memory_check::Known {
+    memory_check::Known {
+        samples: sampling.len() as u64,
+        cases: total,
+        design_values: file.design.as_ref().map_or(0, |d| {
+            rows.saturating_mul(d.value.parameters.value.len() as u64)
+        }),
+        references: 0,
+        revolutions: 0,
+        speed_knots: memory_check::speed_knots(file),
+    }
+}
+
+/// The study's cases: the `count` combinations of the grid's axis `groups` (named
+/// `axes`), then the explicit `cases:`, each with every row of a sampled design,
+/// from the base case (`total` in all); with the design's description.
+fn expand_cases(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    (base, prov): (&CaseParams, &Provenance),
+    effects: &Effects,
+    (groups, axes): (&[Vec<Axis<'_>>], &[String]),
+    (total, count): (u64, u64),
+) -> Result<(Vec<Case>, Option<super::DesignInfo>), StudyError> {
+    let sampled = design::resolve(ctx, file, base, effects, axes)?;
+    let mut resolved = resolve_axes(ctx, base, groups, effects)?;
+    check_repeats(ctx, &resolved)?;
+    if let Some(d) = &sampled {
+        resolved.push(d.group());
+    }
+    let mut cases = Vec::with_capacity(total as usize);
+    expand_grid(ctx, base, prov, &resolved, count, effects, &mut cases)?;
+    let explicit_design = sampled.as_ref().map(|_| &resolved[resolved.len() - 1]);
+    expand_explicit(ctx, file, base, prov, explicit_design, effects, &mut cases)?;
+    Ok((cases, sampled.map(|d| d.info)))
 }
 
 /// Refuses a speed that turns the crank more than once per two samples: no series

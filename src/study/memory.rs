@@ -10,7 +10,8 @@
 //!   (stored samples × stored series + spectra bins, at the stored width) with the
 //!   encoder's scratch;
 //! - the records waiting for the writer: at most two per worker, and the one it writes;
-//! - the ideal references, every channel of each, for the whole run;
+//! - the ideal references a run keeps, every channel of each: at most
+//!   [`reference_cache_entries`] of them, whatever the number of distinct references;
 //! - the case table: every case's parameters, their copy in the file's layout and the
 //!   run's bookkeeping;
 //! - a fixed part for the program, the HDF5 library and thread stacks.
@@ -36,6 +37,18 @@ const FIXED_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
 const DESIGN_VALUE_BYTES: f64 = 8.0 + 40.0;
 /// Per worker beyond its case's data: thread stack, deflate state, FFT twiddles.
 const WORKER_BYTES: f64 = 4.0 * 1024.0 * 1024.0;
+
+/// Bytes of ideal references a run keeps for its workers (at least two per worker):
+/// a study with more distinct references makes them again where a case needs one.
+pub const REFERENCE_CACHE_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+
+/// The ideal references a run keeps at once, of `references` of `bytes` each on `jobs`
+/// workers: all of them when they fit in [`REFERENCE_CACHE_BYTES`], else what fits
+/// there, and never fewer than two per worker.
+pub fn reference_cache_entries(references: u64, jobs: usize, bytes: f64) -> u64 {
+    let fit = (REFERENCE_CACHE_BYTES / bytes.max(1.0)).floor() as u64;
+    references.min(fit.max(2 * jobs.max(1) as u64))
+}
 
 /// The most worker threads a run may start: four per available core, at most
 /// [`MAX_JOBS`]. More only adds threads that wait (and memory for their buffers).
@@ -143,7 +156,7 @@ pub struct MemoryEstimate {
     pub record: f64,
     /// Records waiting for the writer (two per worker) and the one it writes.
     pub queued: f64,
-    /// The ideal references' series, held for the whole run.
+    /// The ideal references' series the run keeps ([`reference_cache_entries`] of them).
     pub references: f64,
     /// The case table: parameters, their copy in the file layout, bookkeeping.
     pub case_table: f64,
@@ -184,7 +197,9 @@ impl MemoryEstimate {
         let per_case = series + replicate_series + analysis + record + scratch;
         let queued = (2.0 * jobs_f + 1.0) * record;
         // The references have the simulated channels only.
-        let references = shape.references as f64 * (simulated + 1.0) * n * 8.0;
+        let reference = (simulated + 1.0) * n * 8.0;
+        let references =
+            reference_cache_entries(shape.references, jobs, reference) as f64 * reference;
         let case_table = shape.cases as f64 * shape.case_bytes()
             + shape.design_values as f64 * DESIGN_VALUE_BYTES;
         let fixed = FIXED_BYTES + (n + n_s + n_f) * 8.0;
@@ -225,14 +240,22 @@ impl MemoryEstimate {
     }
 
     /// The parts held for the whole run: `3 references x 2.75 MiB, case table 12
-    /// cases x 2.19 KiB = 26.2 KiB`.
+    /// cases x 2.19 KiB = 26.2 KiB` (`58 of 16384 references x …` when the run keeps
+    /// only some of them).
     fn held_parts(&self) -> String {
         let s = &self.shape;
+        let reference = (CHANNELS.len() as f64 + 1.0) * s.samples as f64 * 8.0;
+        let kept = reference_cache_entries(s.references, self.jobs, reference);
         format!(
-            "{} reference{} x {}, case table {} cases x {} = {}",
+            "{}{} reference{} x {}, case table {} cases x {} = {}",
+            if kept < s.references {
+                format!("{kept} of ")
+            } else {
+                String::new()
+            },
             s.references,
             if s.references == 1 { "" } else { "s" },
-            bytes(self.references / (s.references.max(1) as f64)),
+            bytes(reference),
             s.cases,
             bytes(s.case_bytes()),
             bytes(self.case_table),
@@ -257,7 +280,7 @@ impl MemoryEstimate {
 pub enum Largest {
     /// The cases in the workers and the records queued: lower the samples per case.
     Samples,
-    /// The ideal references held for the whole run: fewer distinct speeds and bodies.
+    /// The ideal references the run keeps (two per worker at least): fewer samples.
     References,
     /// The case table: fewer cases, or fewer values per case.
     CaseTable,

@@ -133,10 +133,27 @@ fn housing_mut(c: &mut CaseParams) -> &mut Housing {
     c.housing.get_or_insert_with(Housing::default)
 }
 
-/// A field of the case's first defect; without one, of [`Defect::default`] (zero
-/// depth: what a `defect_*` axis would create, and no defect either way).
+/// The case's first defect when its bearing has a defect, i.e. one of nonzero depth
+/// (the `fault` label is not `none`); `None` for a healthy bearing: no defects, or
+/// only zero-depth ones, which are no defect.
+fn first_defect(c: &CaseParams) -> Option<&Defect> {
+    if c.bearing.defects.iter().any(|d| d.depth > 0.0) {
+        c.bearing.defects.first()
+    } else {
+        None
+    }
+}
+
+/// A field of the case's first defect ([`first_defect`]); NaN for a healthy bearing,
+/// whose defect parameters describe nothing.
 fn first_defect_value(c: &CaseParams, f: fn(&Defect) -> f64) -> f64 {
-    f(c.bearing.defects.first().unwrap_or(&Defect::default()))
+    first_defect(c).map_or(f64::NAN, f)
+}
+
+/// The race of the case's first defect when its bearing has a defect of nonzero
+/// depth, `none` for a healthy bearing: what files store as `defect_race`.
+pub fn defect_race_name(c: &CaseParams) -> &'static str {
+    first_defect(c).map_or("none", |d| d.race.name())
 }
 
 macro_rules! param {
@@ -155,10 +172,12 @@ macro_rules! param {
 
 /// Every scalar parameter, in file order. `waviness_*` set both races' first
 /// harmonic; in files they hold the common value (NaN where the races differ).
-/// `rpm` is NaN for a case with a `speed:` profile, and the `speed_*` of a profile
-/// are NaN for any other speed.
+/// `rpm` reads the speed of every constant-speed case (a `speed:` profile that never
+/// changes included), NaN for a speed that varies; the `speed_*` of a profile are NaN
+/// for any other speed.
 /// `defect_*` act on the first defect (created, of zero depth, if absent); in files
-/// they hold its values (those of that zero-depth defect without defects).
+/// they hold its values, NaN for a healthy bearing (no defect of nonzero depth).
+/// `noise_realization` numbers the sensors' noise (docs/model.md §7.8).
 /// `m_h`, `k_h` and `c_h` are the housing's, NaN in files for a case without one.
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
@@ -176,7 +195,7 @@ pub const PARAMETERS: &[ParamDef] = &[
         Speed,
         false,
         "crank speed",
-        |c| c.rpm,
+        |c| c.constant_rpm().unwrap_or(f64::NAN),
         |c, v| c.rpm = v
     ),
     param!(
@@ -524,20 +543,24 @@ pub const PARAMETERS: &[ParamDef] = &[
         |c| c.mechanism.slider_inertia,
         |c, v| c.mechanism.slider_inertia = v
     ),
+    param!(
+        "noise_realization",
+        "noise_realization",
+        Dimensionless,
+        true,
+        "realisation of the sensors' noise, mixed into its seed",
+        |c| c.noise_realization as f64,
+        |c, v| c.noise_realization = v as u64
+    ),
 ];
 
 /// The value of grid axis `name` in `case`, as text: a scalar parameter's value in
 /// its base unit, or the name of the location or of the first defect's race
-/// (`none` without defects).
+/// ([`defect_race_name`]: `none` for a healthy bearing).
 pub fn axis_value(name: &str, case: &CaseParams) -> String {
     match (lookup(name), name) {
         (Some(p), _) => format!("{}", p.get(case)),
-        (None, "defect_race") => case
-            .bearing
-            .defects
-            .first()
-            .map_or("none", |d| d.race.name())
-            .to_string(),
+        (None, "defect_race") => defect_race_name(case).to_string(),
         (None, _) => case.location.to_string(),
     }
 }

@@ -25,7 +25,21 @@ pub(super) fn describe(e: &Error, text: &str) -> (Option<(u64, u64)>, String, St
     } else {
         format!("`{token}` ")
     };
-    let message = match e {
+    let message = message(e, &field, &got);
+    // A missing field is reported where the mapping that lacks it ends: no field to
+    // name there.
+    let field = if matches!(e, Error::SerdeMissingField { .. }) {
+        String::new()
+    } else {
+        field
+    };
+    (place, field, message)
+}
+
+/// The message of the parser error `e` (without its snippet or alias wrapper), found in the dotted
+/// `field`, at the token quoted in `got` (`` `token` `` and a space, or empty).
+fn message(e: &Error, field: &str, got: &str) -> String {
+    match e {
         Error::SerdeUnknownField {
             field: key,
             expected,
@@ -35,18 +49,13 @@ pub(super) fn describe(e: &Error, text: &str) -> (Option<(u64, u64)>, String, St
             expected.join(", ")
         ),
         Error::SerdeMissingField { field: key, .. } => {
-            // Reported where the mapping that lacks it ends: no field to name there.
             let parent = field.rsplit_once('.').map_or("", |(p, _)| p);
             let within = if parent.is_empty() {
                 String::new()
             } else {
                 format!(" in `{parent}`")
             };
-            return (
-                place,
-                String::new(),
-                format!("the required field `{key}` is missing{within}"),
-            );
+            format!("the required field `{key}` is missing{within}")
         }
         Error::DuplicateMappingKey { key, .. } => match key {
             Some(k) => format!("`{k}` is given twice; give each key once"),
@@ -91,8 +100,7 @@ pub(super) fn describe(e: &Error, text: &str) -> (Option<(u64, u64)>, String, St
              (e.g. \"40 um\") or a name"
         ),
         other => internal_free(&other.without_snippet().to_string()),
-    };
-    (place, field, message)
+    }
 }
 
 /// serde's description of a value or type, in the user's words.

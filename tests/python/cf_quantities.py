@@ -41,7 +41,7 @@ _BY_QUANTITY = {
     "dimensionless": [
         "case", "reference", "reference_index", "status", "error_message", "location",
         "defect_race", "fault",
-        "ball_count", "waviness_number", "inner_waviness_number", "outer_waviness_number",
+        "ball_count", "waviness_number", "inner_waviness_number", "outer_waviness_number", "noise_realization",
         "min_loaded_balls", "max_loaded_balls", "steps", "rejected_steps", "rhs_evals",
         "contact_events", "loaded_balls", "speed_profile", "revolution", "replicate",
         "order", "ftf_order", "bpfo_order", "bpfi_order", "bsf_order",

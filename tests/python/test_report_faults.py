@@ -3,9 +3,9 @@ and two widths, each speed a ramp profile (600 → 600 rpm, which runs as a cons
 600 rpm, and a 300 → 900 rpm run-up, zipped), and the healthy bearing as explicit
 `cases:` with `defect_depth: 0` at both speeds.
 
-- The healthy cases are shown as healthy: `defect_race` none, no defect width of their
-  own (the zero-depth defect's 1 mm describes nothing), beside the defects of every
-  width in the metrics views and in every diagnosis condition they share.
+- The healthy cases are stored and shown as healthy: `defect_race` none, no defect width
+  of their own (NaN), beside the defects of every width in the metrics views and in
+  every diagnosis condition they share.
 - The 600 → 600 rpm cases are constant-speed cases: the report draws their panels and
   spectra, at 600 rpm; `analysis.faults` reads them at 600 rpm too, through the one
   helper `studyfile.constant_rpm`.
@@ -91,13 +91,20 @@ def healthy_positions(ds):
     return [k for k in range(ds.sizes["case"]) if str(ds["fault"].values[k]) == "none"]
 
 
-def test_the_file_gives_its_healthy_cases_the_zero_depth_defects_race_and_width(ds):
-    """What the report has to undo: the healthy cases carry race outer and width 1 mm."""
+def test_the_file_stores_its_healthy_cases_without_defect_parameters(ds):
+    """The healthy cases (`defect_depth: 0` over an outer defect 1 mm wide) are stored with
+    race none and NaN angle, width and depth, as their fault label says; the 600 → 600 rpm
+    ramps, which run as a constant speed, store their rpm, the run-ups NaN."""
     healthy = healthy_positions(ds)
     assert len(healthy) == 2 and ds.sizes["case"] == 10
-    assert {str(ds["defect_race"].values[k]) for k in healthy} == {"outer"}
-    assert np.allclose(ds["defect_width"].values[healthy], 1e-3)
-    assert np.all(np.isnan(ds["rpm"].values)) and set(ds["speed_profile"].values) == {"ramp"}
+    assert {str(ds["defect_race"].values[k]) for k in healthy} == {"none"}
+    for name in ("defect_angle", "defect_width", "defect_depth"):
+        assert np.all(np.isnan(ds[name].values[healthy])), name
+    sick = [k for k in range(ds.sizes["case"]) if k not in healthy]
+    assert np.all(np.isfinite(ds["defect_width"].values[sick]))
+    constant = ds["speed_to"].values == ds["speed_from"].values
+    np.testing.assert_array_equal(ds["rpm"].values[constant], ds["speed_from"].values[constant])
+    assert np.all(np.isnan(ds["rpm"].values[~constant])) and set(ds["speed_profile"].values) == {"ramp"}
 
 
 def test_the_metrics_grid_shows_the_healthy_bearing_in_the_none_row_of_every_width(ds):

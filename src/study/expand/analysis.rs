@@ -294,63 +294,73 @@ pub(super) fn envelope_settings(
             value: BandValue::Name(name),
             ..
         }) if name == "auto" => BandChoice::Auto,
-        Some(v) => {
-            let place = Some(at(&v.referenced));
-            let bad = |message: String| ctx.err(place, "envelope.band", message);
-            let BandValue::Range(edges) = &v.value else {
-                return Err(bad(
-                    "expected `auto` or two frequencies [low, high], e.g. [\"2 kHz\", \"8 kHz\"]"
-                        .to_string(),
-                ));
-            };
-            let [low, high] = edges.as_slice() else {
-                return Err(bad(format!(
-                    "{} values; expected two frequencies [low, high] or `auto`",
-                    edges.len()
-                )));
-            };
-            let hz = |s: &Scalar| -> Result<f64, StudyError> {
-                let x = match s {
-                    Scalar::Num(x) => *x,
-                    Scalar::Text(t) => Dimension::Frequency
-                        .parse(t)
-                        .map_err(|m| ctx.err(place, "envelope.band", m))?,
-                };
-                if x.is_finite() {
-                    Ok(x)
-                } else {
-                    Err(bad(format!("{s} is not a finite frequency")))
-                }
-            };
-            let band = Band {
-                low: hz(low)?,
-                high: hz(high)?,
-            };
-            let nyquist = 0.5 * sampling.sample_rate;
-            if !(0.0 <= band.low && band.low < band.high && band.high <= nyquist) {
-                return Err(bad(format!(
-                    "[{} Hz, {} Hz] is not allowed: 0 <= low < high <= sample_rate / 2 = {nyquist} Hz",
-                    band.low, band.high
-                )));
-            }
-            let n = sampling.analysis_window(transient).len();
-            let bins = frequencies(n, sampling.sample_rate)
-                .into_iter()
-                .filter(|&f| band.contains(f))
-                .count();
-            if bins == 0 {
-                return Err(bad(format!(
-                    "[{} Hz, {} Hz] holds no frequency bin of the analysed window \
-                     ({n} samples: bins every {} Hz); widen the band",
-                    band.low,
-                    band.high,
-                    sampling.sample_rate / n as f64
-                )));
-            }
-            BandChoice::Fixed(band)
-        }
+        Some(v) => BandChoice::Fixed(fixed_band(ctx, v, sampling, transient)?),
     };
     Ok(EnvelopeSettings { channels, band })
+}
+
+/// A band `[low, high]` (Hz) given in `envelope.band`: `0 <= low < high <=
+/// sample_rate / 2`, holding at least one bin of the window analysed after `transient`
+/// (s).
+fn fixed_band(
+    ctx: &Ctx<'_>,
+    v: &S<BandValue>,
+    sampling: &Sampling,
+    transient: f64,
+) -> Result<Band, StudyError> {
+    let place = Some(at(&v.referenced));
+    let bad = |message: String| ctx.err(place, "envelope.band", message);
+    let BandValue::Range(edges) = &v.value else {
+        return Err(bad(
+            "expected `auto` or two frequencies [low, high], e.g. [\"2 kHz\", \"8 kHz\"]"
+                .to_string(),
+        ));
+    };
+    let [low, high] = edges.as_slice() else {
+        return Err(bad(format!(
+            "{} values; expected two frequencies [low, high] or `auto`",
+            edges.len()
+        )));
+    };
+    let hz = |s: &Scalar| -> Result<f64, StudyError> {
+        let x = match s {
+            Scalar::Num(x) => *x,
+            Scalar::Text(t) => Dimension::Frequency
+                .parse(t)
+                .map_err(|m| ctx.err(place, "envelope.band", m))?,
+        };
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(bad(format!("{s} is not a finite frequency")))
+        }
+    };
+    let band = Band {
+        low: hz(low)?,
+        high: hz(high)?,
+    };
+    let nyquist = 0.5 * sampling.sample_rate;
+    if !(0.0 <= band.low && band.low < band.high && band.high <= nyquist) {
+        return Err(bad(format!(
+            "[{} Hz, {} Hz] is not allowed: 0 <= low < high <= sample_rate / 2 = {nyquist} Hz",
+            band.low, band.high
+        )));
+    }
+    let n = sampling.analysis_window(transient).len();
+    let bins = frequencies(n, sampling.sample_rate)
+        .into_iter()
+        .filter(|&f| band.contains(f))
+        .count();
+    if bins == 0 {
+        return Err(bad(format!(
+            "[{} Hz, {} Hz] holds no frequency bin of the analysed window \
+             ({n} samples: bins every {} Hz); widen the band",
+            band.low,
+            band.high,
+            sampling.sample_rate / n as f64
+        )));
+    }
+    Ok(band)
 }
 
 /// Whether series and spectra are stored as float32, and the deflate level.

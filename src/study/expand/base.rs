@@ -2,6 +2,7 @@
 //! from the grid file's sections, and the checks that make a case runnable.
 
 use super::*;
+use crate::study::config::{HarmonicSection, HousingSection};
 
 /// The most balls of the bearing's race diameters that fit side by side around the
 /// pitch circle: balls of diameter `D = (d_o − d_i)/2` with centres on the circle of
@@ -120,8 +121,23 @@ pub(super) fn balls_fit(params: &CaseParams) -> Result<(), crate::error::ParamEr
     }
 }
 
-/// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `rpm:` or
-/// `speed:`, and `location:`.
+/// Applies the setting `v` (when given) at `field` to the parameter `name` of `c`,
+/// recording where in `prov`.
+fn apply_given(
+    ctx: &Ctx<'_>,
+    c: &mut CaseParams,
+    (name, v, field): (&str, &Option<S<Scalar>>, &str),
+    effects: &Effects,
+    prov: &mut Provenance,
+) -> Result<(), StudyError> {
+    match v {
+        Some(v) => ctx.apply(c, name, v, field, effects, prov),
+        None => Ok(()),
+    }
+}
+
+/// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `housing:`,
+/// `rpm:` or `speed:`, and `location:`.
 pub(super) fn base_case(
     ctx: &Ctx<'_>,
     file: &GridFile,
@@ -137,14 +153,6 @@ pub(super) fn base_case(
         c.bearing.inner_waviness = RaceWaviness::single(35, 4e-6);
         c.bearing.outer_waviness = RaceWaviness::single(35, 4e-6);
     }
-    let set = |c: &mut CaseParams,
-               name: &str,
-               v: &Option<S<Scalar>>,
-               field: &str,
-               prov: &mut Provenance| match v {
-        Some(v) => ctx.apply(c, name, v, field, effects, prov),
-        None => Ok(()),
-    };
     if let Some(m) = &file.mechanism {
         for (name, v) in [
             ("crank_length", &m.crank_length),
@@ -156,66 +164,15 @@ pub(super) fn base_case(
             ("slider_mass", &m.slider_mass),
             ("slider_inertia", &m.slider_inertia),
         ] {
-            set(&mut c, name, v, &format!("mechanism.{name}"), prov)?;
+            let field = format!("mechanism.{name}");
+            apply_given(ctx, &mut c, (name, v, &field), effects, prov)?;
         }
     }
     if let Some(b) = &file.bearing {
-        for (name, v) in [
-            ("ball_count", &b.ball_count),
-            ("clearance", &b.clearance),
-            ("damping", &b.damping),
-            ("inner_race_diameter", &b.inner_race_diameter),
-            ("outer_race_diameter", &b.outer_race_diameter),
-        ] {
-            set(&mut c, name, v, &format!("bearing.{name}"), prov)?;
-        }
-        match &b.stiffness {
-            Some(S {
-                value: Scalar::Text(t),
-                referenced,
-                ..
-            }) if t == "harris" => {
-                c.bearing.stiffness = harris(ctx, b.geometry.as_ref(), at(referenced))?;
-            }
-            other => set(&mut c, "stiffness", other, "bearing.stiffness", prov)?,
-        }
-        damping_law(ctx, &mut c, b, effects)?;
-        for (race, section) in [
-            ("", &b.waviness),
-            ("inner_", &b.inner_waviness),
-            ("outer_", &b.outer_waviness),
-        ] {
-            if let Some(w) = section {
-                waviness(ctx, &mut c, race, w, effects, prov)?;
-            }
-        }
-        if let Some(d) = b.geometry.as_ref().and_then(|g| g.ball_diameter.as_ref()) {
-            c.bearing.ball_diameter =
-                ctx.quantity(d, Dimension::Length, "bearing.geometry.ball_diameter")?;
-        }
-        if let Some(list) = &b.defects {
-            c.bearing.defects = defects(ctx, list, effects)?;
-        }
+        bearing_section(ctx, &mut c, b, effects, prov)?;
     }
     if let Some(h) = &file.housing {
-        if !effects.housing {
-            return Err(ctx.err(
-                Some(at(&h.referenced)),
-                "housing",
-                format!(
-                    "the housing effect is off (effects: [{}]); add `housing` to `effects` \
-                     to set it",
-                    effects.names().join(", ")
-                ),
-            ));
-        }
-        for (name, v) in [
-            ("m_h", &h.value.m_h),
-            ("k_h", &h.value.k_h),
-            ("c_h", &h.value.c_h),
-        ] {
-            set(&mut c, name, v, &format!("housing.{name}"), prov)?;
-        }
+        housing_section(ctx, &mut c, h, effects, prov)?;
     }
     match (&file.speed, &file.rpm) {
         (Some(_), Some(rpm)) => {
@@ -230,11 +187,100 @@ pub(super) fn base_case(
             c.speed = Some(ctx.speed(&speed.value, &speed.referenced, "speed", prov)?);
             c.rpm = f64::NAN;
         }
-        (None, rpm) => set(&mut c, "rpm", rpm, "rpm", prov)?,
+        (None, rpm) => apply_given(ctx, &mut c, ("rpm", rpm, "rpm"), effects, prov)?,
     }
-    set(&mut c, "location", &file.location, "location", prov)?;
+    let location = ("location", &file.location, "location");
+    apply_given(ctx, &mut c, location, effects, prov)?;
     Ok(c)
 }
+
+/// The `bearing:` section: its scalars, the stiffness (a value or `harris`), the
+/// damping law, waviness, ball diameter and defects.
+fn bearing_section(
+    ctx: &Ctx<'_>,
+    c: &mut CaseParams,
+    b: &BearingSection,
+    effects: &Effects,
+    prov: &mut Provenance,
+) -> Result<(), StudyError> {
+    for (name, v) in [
+        ("ball_count", &b.ball_count),
+        ("clearance", &b.clearance),
+        ("damping", &b.damping),
+        ("inner_race_diameter", &b.inner_race_diameter),
+        ("outer_race_diameter", &b.outer_race_diameter),
+    ] {
+        let field = format!("bearing.{name}");
+        apply_given(ctx, c, (name, v, &field), effects, prov)?;
+    }
+    match &b.stiffness {
+        Some(S {
+            value: Scalar::Text(t),
+            referenced,
+            ..
+        }) if t == "harris" => {
+            c.bearing.stiffness = harris(ctx, b.geometry.as_ref(), at(referenced))?;
+        }
+        other => {
+            let stiffness = ("stiffness", other, "bearing.stiffness");
+            apply_given(ctx, c, stiffness, effects, prov)?;
+        }
+    }
+    damping_law(ctx, c, b, effects)?;
+    for (race, section) in [
+        ("", &b.waviness),
+        ("inner_", &b.inner_waviness),
+        ("outer_", &b.outer_waviness),
+    ] {
+        if let Some(w) = section {
+            waviness(ctx, c, race, w, effects, prov)?;
+        }
+    }
+    if let Some(d) = b.geometry.as_ref().and_then(|g| g.ball_diameter.as_ref()) {
+        c.bearing.ball_diameter =
+            ctx.quantity(d, Dimension::Length, "bearing.geometry.ball_diameter")?;
+    }
+    if let Some(list) = &b.defects {
+        c.bearing.defects = defects(ctx, list, effects)?;
+    }
+    Ok(())
+}
+
+/// The `housing:` section (docs/model.md §3.9), only with the housing effect on.
+fn housing_section(
+    ctx: &Ctx<'_>,
+    c: &mut CaseParams,
+    h: &S<HousingSection>,
+    effects: &Effects,
+    prov: &mut Provenance,
+) -> Result<(), StudyError> {
+    if !effects.housing {
+        return Err(ctx.err(
+            Some(at(&h.referenced)),
+            "housing",
+            format!(
+                "the housing effect is off (effects: [{}]); add `housing` to `effects` \
+                 to set it",
+                effects.names().join(", ")
+            ),
+        ));
+    }
+    for (name, v) in [
+        ("m_h", &h.value.m_h),
+        ("k_h", &h.value.k_h),
+        ("c_h", &h.value.c_h),
+    ] {
+        let field = format!("housing.{name}");
+        apply_given(ctx, c, (name, v, &field), effects, prov)?;
+    }
+    Ok(())
+}
+
+/// The values `bearing.damping_model` takes.
+const DAMPING_MODELS: &str = "compression_only, two_sided, hunt_crossley_alpha, hunt_crossley, \
+                              lankarani_nikravesh, flores or gonthier";
+/// The laws that take `restitution`.
+const RESTITUTION_LAWS: &str = "hunt_crossley, lankarani_nikravesh, flores and gonthier";
 
 /// `bearing.damping_model` with its `restitution` or `alpha` (docs/model.md §2.5):
 /// each key only with the laws that use it, the values in range.
@@ -244,118 +290,24 @@ pub(super) fn damping_law(
     b: &BearingSection,
     effects: &Effects,
 ) -> Result<(), StudyError> {
-    pub(super) const NAMES: &str =
-        "compression_only, two_sided, hunt_crossley_alpha, hunt_crossley, \
-                         lankarani_nikravesh, flores or gonthier";
-    let model = match &b.damping_model {
-        None => DampingModel::CompressionOnly,
-        Some(m) => match m.value.as_str() {
-            "compression_only" => DampingModel::CompressionOnly,
-            "two_sided" => DampingModel::TwoSided,
-            "hunt_crossley_alpha" => DampingModel::HuntCrossleyAlpha { alpha: 0.0 },
-            name => match RestitutionLaw::ALL.into_iter().find(|l| l.name() == name) {
-                Some(law) => DampingModel::Restitution {
-                    law,
-                    restitution: 1.0,
-                },
-                None => {
-                    return Err(ctx.err(
-                        Some(at(&m.referenced)),
-                        "bearing.damping_model",
-                        format!("`{name}` is not allowed: {NAMES}"),
-                    ))
-                }
-            },
-        },
+    let keys = DampingKeys {
+        ctx,
+        b,
+        effects,
+        name: b
+            .damping_model
+            .as_ref()
+            .map_or("compression_only", |m| m.value.as_str()),
     };
-    let name = b
-        .damping_model
-        .as_ref()
-        .map_or("compression_only", |m| m.value.as_str());
-    let model_at = b.damping_model.as_ref().map(|m| at(&m.referenced));
-    let unused = |key: &str, v: &S<Scalar>, uses: &str| {
-        ctx.err(
-            Some(at(&v.referenced)),
-            &format!("bearing.{key}"),
-            format!("damping_model {name} does not use {key}; {key} belongs to {uses}"),
-        )
-    };
-    let effect_off = |key: &str, v: &S<Scalar>| {
-        (!effects.damping).then(|| {
-            ctx.err(
-                Some(at(&v.referenced)),
-                &format!("bearing.{key}"),
-                format!(
-                    "the damping effect is off (effects: [{}]); add `damping` to `effects` to set it",
-                    effects.names().join(", ")
-                ),
-            )
-        })
-    };
-    let missing = |key: &str, what: &str| {
-        ctx.err(
-            model_at,
-            &format!("bearing.{key}"),
-            format!("damping_model {name} needs `{key}`: {what}"),
-        )
-    };
-    pub(super) const RESTITUTION_LAWS: &str =
-        "hunt_crossley, lankarani_nikravesh, flores and gonthier";
-    c.bearing.damping_model = match model {
-        DampingModel::HuntCrossleyAlpha { .. } => {
-            if let Some(v) = &b.restitution {
-                return Err(unused("restitution", v, RESTITUTION_LAWS));
-            }
-            let v = b
-                .alpha
-                .as_ref()
-                .ok_or_else(|| missing("alpha", "a rate in s/m, >= 0"))?;
-            if let Some(e) = effect_off("alpha", v) {
-                return Err(e);
-            }
-            let alpha = ctx.quantity(v, Dimension::InverseSpeed, "bearing.alpha")?;
-            if !(alpha.is_finite() && alpha >= 0.0) {
-                return Err(ctx.err(
-                    Some(at(&v.referenced)),
-                    "bearing.alpha",
-                    format!("{} is not allowed: a finite rate >= 0 s/m", v.value),
-                ));
-            }
-            DampingModel::HuntCrossleyAlpha { alpha }
-        }
-        DampingModel::Restitution { law, .. } => {
-            if let Some(v) = &b.alpha {
-                return Err(unused("alpha", v, "hunt_crossley_alpha"));
-            }
-            let v = b
-                .restitution
-                .as_ref()
-                .ok_or_else(|| missing("restitution", "a coefficient of restitution in (0, 1]"))?;
-            if let Some(e) = effect_off("restitution", v) {
-                return Err(e);
-            }
-            let e = ctx.quantity(v, Dimension::Dimensionless, "bearing.restitution")?;
-            if !(e > 0.0 && e <= 1.0) {
-                return Err(ctx.err(
-                    Some(at(&v.referenced)),
-                    "bearing.restitution",
-                    format!(
-                        "{} is not allowed: a coefficient of restitution in (0, 1]",
-                        v.value
-                    ),
-                ));
-            }
-            DampingModel::Restitution {
-                law,
-                restitution: e,
-            }
-        }
+    c.bearing.damping_model = match damping_model(ctx, b)? {
+        DampingModel::HuntCrossleyAlpha { .. } => keys.alpha()?,
+        DampingModel::Restitution { law, .. } => keys.restitution(law)?,
         other => {
             if let Some(v) = &b.restitution {
-                return Err(unused("restitution", v, RESTITUTION_LAWS));
+                return Err(keys.unused("restitution", v, RESTITUTION_LAWS));
             }
             if let Some(v) = &b.alpha {
-                return Err(unused("alpha", v, "hunt_crossley_alpha"));
+                return Err(keys.unused("alpha", v, "hunt_crossley_alpha"));
             }
             other
         }
@@ -367,8 +319,9 @@ pub(super) fn damping_law(
             Some(at(&v.referenced)),
             "bearing.damping",
             format!(
-                "damping_model {name} does not use the damping coefficient C; it belongs to \
-                 compression_only and two_sided"
+                "damping_model {} does not use the damping coefficient C; it belongs to \
+                 compression_only and two_sided",
+                keys.name
             ),
         ));
     }
@@ -380,6 +333,135 @@ pub(super) fn damping_law(
         c.bearing.damping = 0.0;
     }
     Ok(())
+}
+
+/// The law named by `bearing.damping_model` (compression-only when not given), its
+/// `alpha` or `restitution` still unset.
+fn damping_model(ctx: &Ctx<'_>, b: &BearingSection) -> Result<DampingModel, StudyError> {
+    let Some(m) = &b.damping_model else {
+        return Ok(DampingModel::CompressionOnly);
+    };
+    Ok(match m.value.as_str() {
+        "compression_only" => DampingModel::CompressionOnly,
+        "two_sided" => DampingModel::TwoSided,
+        "hunt_crossley_alpha" => DampingModel::HuntCrossleyAlpha { alpha: 0.0 },
+        name => match RestitutionLaw::ALL.into_iter().find(|l| l.name() == name) {
+            Some(law) => DampingModel::Restitution {
+                law,
+                restitution: 1.0,
+            },
+            None => {
+                return Err(ctx.err(
+                    Some(at(&m.referenced)),
+                    "bearing.damping_model",
+                    format!("`{name}` is not allowed: {DAMPING_MODELS}"),
+                ))
+            }
+        },
+    })
+}
+
+/// The `bearing:` keys of a damping law named `name` (as written), read and refused
+/// with the law named.
+struct DampingKeys<'a> {
+    ctx: &'a Ctx<'a>,
+    b: &'a BearingSection,
+    effects: &'a Effects,
+    name: &'a str,
+}
+
+impl DampingKeys<'_> {
+    /// `key` is set but the law does not use it; it belongs to the laws `uses`.
+    fn unused(&self, key: &str, v: &S<Scalar>, uses: &str) -> StudyError {
+        let name = self.name;
+        self.ctx.err(
+            Some(at(&v.referenced)),
+            &format!("bearing.{key}"),
+            format!("damping_model {name} does not use {key}; {key} belongs to {uses}"),
+        )
+    }
+
+    /// `key`, set to `v`, with the damping effect off.
+    fn effect_off(&self, key: &str, v: &S<Scalar>) -> Option<StudyError> {
+        (!self.effects.damping).then(|| {
+            self.ctx.err(
+                Some(at(&v.referenced)),
+                &format!("bearing.{key}"),
+                format!(
+                    "the damping effect is off (effects: [{}]); add `damping` to `effects` to set it",
+                    self.effects.names().join(", ")
+                ),
+            )
+        })
+    }
+
+    /// The law needs `key`, `what`, which is not given.
+    fn missing(&self, key: &str, what: &str) -> StudyError {
+        let model_at = self.b.damping_model.as_ref().map(|m| at(&m.referenced));
+        self.ctx.err(
+            model_at,
+            &format!("bearing.{key}"),
+            format!("damping_model {} needs `{key}`: {what}", self.name),
+        )
+    }
+
+    /// Hunt–Crossley with its `alpha` (s/m, ≥ 0).
+    fn alpha(&self) -> Result<DampingModel, StudyError> {
+        let b = self.b;
+        if let Some(v) = &b.restitution {
+            return Err(self.unused("restitution", v, RESTITUTION_LAWS));
+        }
+        let v = b
+            .alpha
+            .as_ref()
+            .ok_or_else(|| self.missing("alpha", "a rate in s/m, >= 0"))?;
+        if let Some(e) = self.effect_off("alpha", v) {
+            return Err(e);
+        }
+        let alpha = self
+            .ctx
+            .quantity(v, Dimension::InverseSpeed, "bearing.alpha")?;
+        if !(alpha.is_finite() && alpha >= 0.0) {
+            return Err(self.ctx.err(
+                Some(at(&v.referenced)),
+                "bearing.alpha",
+                format!("{} is not allowed: a finite rate >= 0 s/m", v.value),
+            ));
+        }
+        Ok(DampingModel::HuntCrossleyAlpha { alpha })
+    }
+
+    /// The restitution `law` with its coefficient of restitution in (0, 1].
+    fn restitution(&self, law: RestitutionLaw) -> Result<DampingModel, StudyError> {
+        let b = self.b;
+        if let Some(v) = &b.alpha {
+            return Err(self.unused("alpha", v, "hunt_crossley_alpha"));
+        }
+        let v = b
+            .restitution
+            .as_ref()
+            .ok_or_else(|| self.missing("restitution", "a coefficient of restitution in (0, 1]"))?;
+        if let Some(e) = self.effect_off("restitution", v) {
+            return Err(e);
+        }
+        let e = self
+            .ctx
+            .quantity(v, Dimension::Dimensionless, "bearing.restitution")?;
+        if !(e > 0.0 && e <= 1.0) {
+            return Err(self.ctx.err(
+                Some(at(&v.referenced)),
+                "bearing.restitution",
+                format!(
+                    "{} is not allowed: a coefficient of restitution in (0, 1]",
+                    v.value
+                ),
+            ));
+        }
+        Ok(DampingModel::Restitution {
+            law,
+            restitution: e,
+        })
+    }
 }
 
 /// A `waviness:` (race = "") or `inner_/outer_waviness:` section.
@@ -397,57 +479,7 @@ pub(super) fn waviness(
         format!("bearing.{race}waviness")
     };
     if let Some(list) = &w.harmonics {
-        if let Some((key, v)) = [
-            ("number", &w.number),
-            ("amplitude", &w.amplitude),
-            ("phase", &w.phase),
-        ]
-        .into_iter()
-        .find_map(|(k, v)| v.as_ref().map(|v| (k, v)))
-        {
-            return Err(ctx.err(
-                Some(at(&v.referenced)),
-                &format!("{section}.{key}"),
-                "give either `harmonics:` or a single number/amplitude/phase, not both",
-            ));
-        }
-        if let Some((effect, false)) = effects.governing("waviness") {
-            return Err(ctx.err(
-                Some(at(&list.referenced)),
-                &format!("{section}.harmonics"),
-                format!("the {effect} effect is off; add `{effect}` to `effects` to set it"),
-            ));
-        }
-        let mut harmonics = Vec::new();
-        for (k, h) in list.value.iter().enumerate() {
-            let field = format!("{section}.harmonics[{k}]");
-            let number = ctx.quantity(
-                &h.number,
-                Dimension::Dimensionless,
-                &format!("{field}.number"),
-            )?;
-            if number.fract() != 0.0 || !(1.0..=u32::MAX as f64).contains(&number) {
-                return Err(ctx.err(
-                    Some(at(&h.number.referenced)),
-                    &format!("{field}.number"),
-                    format!("{number} is not allowed: a whole number >= 1"),
-                ));
-            }
-            harmonics.push(Harmonic {
-                number: number as u32,
-                amplitude: ctx.quantity(
-                    &h.amplitude,
-                    Dimension::Length,
-                    &format!("{field}.amplitude"),
-                )?,
-                phase: h
-                    .phase
-                    .as_ref()
-                    .map(|p| ctx.quantity(p, Dimension::Angle, &format!("{field}.phase")))
-                    .transpose()?
-                    .unwrap_or(0.0),
-            });
-        }
+        let harmonics = harmonics(ctx, &section, w, list, effects)?;
         let races: Vec<&mut RaceWaviness> = match race {
             "inner_" => vec![&mut c.bearing.inner_waviness],
             "outer_" => vec![&mut c.bearing.outer_waviness],
@@ -484,6 +516,70 @@ pub(super) fn waviness(
         }
     }
     Ok(())
+}
+
+/// The `harmonics:` list of the waviness section `w` at `section`: each harmonic's
+/// number (a whole number ≥ 1), amplitude (m) and phase (rad, 0 when not given).
+/// Refused next to a single number/amplitude/phase, or with the waviness effect off.
+fn harmonics(
+    ctx: &Ctx<'_>,
+    section: &str,
+    w: &WavinessSection,
+    list: &S<Vec<HarmonicSection>>,
+    effects: &Effects,
+) -> Result<Vec<Harmonic>, StudyError> {
+    if let Some((key, v)) = [
+        ("number", &w.number),
+        ("amplitude", &w.amplitude),
+        ("phase", &w.phase),
+    ]
+    .into_iter()
+    .find_map(|(k, v)| v.as_ref().map(|v| (k, v)))
+    {
+        return Err(ctx.err(
+            Some(at(&v.referenced)),
+            &format!("{section}.{key}"),
+            "give either `harmonics:` or a single number/amplitude/phase, not both",
+        ));
+    }
+    if let Some((effect, false)) = effects.governing("waviness") {
+        return Err(ctx.err(
+            Some(at(&list.referenced)),
+            &format!("{section}.harmonics"),
+            format!("the {effect} effect is off; add `{effect}` to `effects` to set it"),
+        ));
+    }
+    let mut harmonics = Vec::new();
+    for (k, h) in list.value.iter().enumerate() {
+        let field = format!("{section}.harmonics[{k}]");
+        let number = ctx.quantity(
+            &h.number,
+            Dimension::Dimensionless,
+            &format!("{field}.number"),
+        )?;
+        if number.fract() != 0.0 || !(1.0..=u32::MAX as f64).contains(&number) {
+            return Err(ctx.err(
+                Some(at(&h.number.referenced)),
+                &format!("{field}.number"),
+                format!("{number} is not allowed: a whole number >= 1"),
+            ));
+        }
+        harmonics.push(Harmonic {
+            number: number as u32,
+            amplitude: ctx.quantity(
+                &h.amplitude,
+                Dimension::Length,
+                &format!("{field}.amplitude"),
+            )?,
+            phase: h
+                .phase
+                .as_ref()
+                .map(|p| ctx.quantity(p, Dimension::Angle, &format!("{field}.phase")))
+                .transpose()?
+                .unwrap_or(0.0),
+        });
+    }
+    Ok(harmonics)
 }
 
 /// The `bearing.defects:` list, each checked with its field named.

@@ -141,6 +141,11 @@ impl Ctx<'_> {
                         v.value
                     ),
                 }
+            } else if param.name == "noise_realization" {
+                format!(
+                    "noise_realization must be a whole number, 0 or more, got {}",
+                    v.value
+                )
             } else {
                 format!(
                     "{} must be a whole number of waves, 1 or more, got {}",

@@ -7,6 +7,7 @@ use super::{at, Ctx, Effects, ResolvedAxis, Target};
 use crate::mechanism::CaseParams;
 use crate::study::config::{DesignParameter, DesignSection, GridFile, Scalar, S};
 use crate::study::design::{self, Distribution, Method};
+use crate::study::params::ParamDef;
 use crate::study::StudyError;
 
 /// A resolved design: what the file records, and its columns.
@@ -104,21 +105,14 @@ fn method_of(ctx: &Ctx<'_>, d: &DesignSection) -> Result<Method, StudyError> {
     })
 }
 
-/// The design drawn and mapped onto its parameters; `axes` are the grid's axis
-/// names (a parameter is either an axis or in the design).
-pub(super) fn resolve(
+/// The design's `seed` (0 when not given; at most 2^63 − 1, as the file stores it)
+/// and whether its points are scrambled (the default; only sobol and saltelli
+/// designs take `scramble`).
+fn seed_and_scramble(
     ctx: &Ctx<'_>,
-    file: &GridFile,
-    base: &CaseParams,
-    effects: &Effects,
-    axes: &[String],
-) -> Result<Option<Design>, StudyError> {
-    let Some(section) = &file.design else {
-        return Ok(None);
-    };
-    let d = &section.value;
-    let method = method_of(ctx, d)?;
-    let rows = rows(ctx, file)?;
+    d: &DesignSection,
+    method: Method,
+) -> Result<(u64, bool), StudyError> {
     let seed = d.seed.as_ref().map_or(0, |s| s.value);
     if let Some(s) = d.seed.as_ref().filter(|s| s.value > i64::MAX as u64) {
         return Err(ctx.err(
@@ -144,6 +138,25 @@ pub(super) fn resolve(
             ))
         }
     };
+    Ok((seed, scramble))
+}
+
+/// The design drawn and mapped onto its parameters; `axes` are the grid's axis
+/// names (a parameter is either an axis or in the design).
+pub(super) fn resolve(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    base: &CaseParams,
+    effects: &Effects,
+    axes: &[String],
+) -> Result<Option<Design>, StudyError> {
+    let Some(section) = &file.design else {
+        return Ok(None);
+    };
+    let d = &section.value;
+    let method = method_of(ctx, d)?;
+    let rows = rows(ctx, file)?;
+    let (seed, scramble) = seed_and_scramble(ctx, d, method)?;
     let mut columns = Vec::new();
     let mut fields = Vec::new();
     for (name, spec) in &d.parameters.value {
@@ -192,7 +205,7 @@ pub(super) fn resolve(
 enum Column {
     /// A scalar parameter drawn from a distribution; whole numbers for counts
     /// (`⌊x⌋` of a uniform draw over `[min, max + 1)`).
-    Scalar(&'static crate::study::params::ParamDef, Distribution),
+    Scalar(&'static ParamDef, Distribution),
     /// One of these values, equally likely.
     Choices(Vec<Target>),
 }
@@ -228,15 +241,12 @@ fn column(
     field: &str,
     place: (u64, u64),
 ) -> Result<Column, StudyError> {
-    let resolve =
-        |v: &S<Scalar>, sub: &str| ctx.resolve(base, name, v, &format!("{field}.{sub}"), effects);
-    let scalar = |v: &S<Scalar>, sub: &str| match resolve(v, sub)? {
-        Target::Param(p, x) => Ok((p, x)),
-        Target::Location(_) | Target::DefectRace(_) => Err(ctx.err(
-            Some(at(&v.referenced)),
-            &format!("{field}.{sub}"),
-            format!("{name} is a name: give its values as `choices: [...]`"),
-        )),
+    let parameter = DesignField {
+        ctx,
+        base,
+        effects,
+        name,
+        field,
     };
     match spec {
         DesignParameter {
@@ -246,31 +256,7 @@ fn column(
             mean: None,
             sd: None,
             scale: None,
-        } => {
-            if list.value.is_empty() {
-                return Err(ctx.err(
-                    Some(at(&list.referenced)),
-                    &format!("{field}.choices"),
-                    "give at least one choice",
-                ));
-            }
-            let options = list
-                .value
-                .iter()
-                .enumerate()
-                .map(|(k, v)| resolve(v, &format!("choices[{k}]")))
-                .collect::<Result<Vec<_>, _>>()?;
-            for (k, t) in options.iter().enumerate() {
-                if options[..k].iter().any(|o| o.same_as(t)) {
-                    return Err(ctx.err(
-                        Some(at(&list.value[k].referenced)),
-                        &format!("{field}.choices[{k}]"),
-                        "repeats an earlier choice; give each choice once",
-                    ));
-                }
-            }
-            Ok(Column::Choices(options))
-        }
+        } => parameter.choices(list),
         DesignParameter {
             min: Some(lo),
             max: Some(hi),
@@ -278,58 +264,7 @@ fn column(
             sd: None,
             choices: None,
             scale,
-        } => {
-            let (p, min) = scalar(lo, "min")?;
-            let (_, max) = scalar(hi, "max")?;
-            if min >= max {
-                return Err(ctx.err(
-                    Some(at(&hi.referenced)),
-                    &format!("{field}.max"),
-                    format!(
-                        "{max} is not allowed: above min = {min} {}",
-                        p.dimension.base_unit()
-                    ),
-                ));
-            }
-            let log = match scale {
-                None => false,
-                Some(s) if s.value == "linear" => false,
-                Some(s) if s.value == "log" && !p.integer && min > 0.0 => true,
-                Some(s) if s.value == "log" => {
-                    return Err(ctx.err(
-                        Some(at(&s.referenced)),
-                        &format!("{field}.scale"),
-                        if p.integer {
-                            format!(
-                            "{name} is a count: drawn uniformly from min to max; leave scale out"
-                        )
-                        } else {
-                            format!("log needs min > 0, got {min} {}", p.dimension.base_unit())
-                        },
-                    ))
-                }
-                Some(s) => {
-                    return Err(ctx.err(
-                        Some(at(&s.referenced)),
-                        &format!("{field}.scale"),
-                        format!("`{}` is not a scale; expected linear or log", s.value),
-                    ))
-                }
-            };
-            Ok(Column::Scalar(
-                p,
-                if log {
-                    Distribution::LogUniform { min, max }
-                } else if p.integer {
-                    Distribution::Uniform {
-                        min,
-                        max: max + 1.0,
-                    }
-                } else {
-                    Distribution::Uniform { min, max }
-                },
-            ))
-        }
+        } => parameter.range((lo, hi), scale.as_ref()),
         DesignParameter {
             mean: Some(m),
             sd: Some(s),
@@ -337,27 +272,154 @@ fn column(
             max: None,
             choices: None,
             scale: None,
-        } => {
-            let (p, mean) = scalar(m, "mean")?;
-            let sd = ctx.quantity(s, p.dimension, &format!("{field}.sd"))?;
-            if p.integer || sd <= 0.0 {
-                return Err(ctx.err(
-                    Some(at(&s.referenced)),
-                    &format!("{field}.sd"),
-                    if p.integer {
-                        format!("{name} is a count; give min and max (or choices), not mean and sd")
-                    } else {
-                        format!("{sd} is not allowed: a standard deviation > 0")
-                    },
-                ));
-            }
-            Ok(Column::Scalar(p, Distribution::Normal { mean, sd }))
-        }
+        } => parameter.normal(m, s),
         _ => Err(ctx.err(
             Some(place),
             field,
             "give exactly one of: min and max (with scale: linear or log), mean and sd \
              (normal), or choices",
         )),
+    }
+}
+
+/// A design parameter `name` at `field` of the grid file, with what its values are
+/// resolved against.
+struct DesignField<'a> {
+    ctx: &'a Ctx<'a>,
+    base: &'a CaseParams,
+    effects: &'a Effects,
+    name: &'a str,
+    field: &'a str,
+}
+
+impl DesignField<'_> {
+    /// The value `v` given at `sub` of the parameter's field.
+    fn resolve(&self, v: &S<Scalar>, sub: &str) -> Result<Target, StudyError> {
+        let field = format!("{}.{sub}", self.field);
+        self.ctx
+            .resolve(self.base, self.name, v, &field, self.effects)
+    }
+
+    /// The value `v` at `sub` of a scalar parameter, in base units; a name is refused.
+    fn scalar(&self, v: &S<Scalar>, sub: &str) -> Result<(&'static ParamDef, f64), StudyError> {
+        match self.resolve(v, sub)? {
+            Target::Param(p, x) => Ok((p, x)),
+            Target::Location(_) | Target::DefectRace(_) => Err(self.ctx.err(
+                Some(at(&v.referenced)),
+                &format!("{}.{sub}", self.field),
+                format!(
+                    "{} is a name: give its values as `choices: [...]`",
+                    self.name
+                ),
+            )),
+        }
+    }
+
+    /// `choices: [...]`: at least one, none repeated.
+    fn choices(&self, list: &S<Vec<S<Scalar>>>) -> Result<Column, StudyError> {
+        let (ctx, field) = (self.ctx, self.field);
+        if list.value.is_empty() {
+            return Err(ctx.err(
+                Some(at(&list.referenced)),
+                &format!("{field}.choices"),
+                "give at least one choice",
+            ));
+        }
+        let options = list
+            .value
+            .iter()
+            .enumerate()
+            .map(|(k, v)| self.resolve(v, &format!("choices[{k}]")))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (k, t) in options.iter().enumerate() {
+            if options[..k].iter().any(|o| o.same_as(t)) {
+                return Err(ctx.err(
+                    Some(at(&list.value[k].referenced)),
+                    &format!("{field}.choices[{k}]"),
+                    "repeats an earlier choice; give each choice once",
+                ));
+            }
+        }
+        Ok(Column::Choices(options))
+    }
+
+    /// `min` < `max` in the parameter's units, drawn uniformly on a linear or (for
+    /// positive non-counts) log `scale`; counts are whole numbers from min to max.
+    fn range(
+        &self,
+        (lo, hi): (&S<Scalar>, &S<Scalar>),
+        scale: Option<&S<String>>,
+    ) -> Result<Column, StudyError> {
+        let (ctx, name, field) = (self.ctx, self.name, self.field);
+        let (p, min) = self.scalar(lo, "min")?;
+        let (_, max) = self.scalar(hi, "max")?;
+        if min >= max {
+            return Err(ctx.err(
+                Some(at(&hi.referenced)),
+                &format!("{field}.max"),
+                format!(
+                    "{max} is not allowed: above min = {min} {}",
+                    p.dimension.base_unit()
+                ),
+            ));
+        }
+        let log = match scale {
+            None => false,
+            Some(s) if s.value == "linear" => false,
+            Some(s) if s.value == "log" && !p.integer && min > 0.0 => true,
+            Some(s) if s.value == "log" => {
+                return Err(ctx.err(
+                    Some(at(&s.referenced)),
+                    &format!("{field}.scale"),
+                    if p.integer {
+                        format!(
+                            "{name} is a count: drawn uniformly from min to max; leave scale out"
+                        )
+                    } else {
+                        format!("log needs min > 0, got {min} {}", p.dimension.base_unit())
+                    },
+                ))
+            }
+            Some(s) => {
+                return Err(ctx.err(
+                    Some(at(&s.referenced)),
+                    &format!("{field}.scale"),
+                    format!("`{}` is not a scale; expected linear or log", s.value),
+                ))
+            }
+        };
+        Ok(Column::Scalar(
+            p,
+            if log {
+                Distribution::LogUniform { min, max }
+            } else if p.integer {
+                Distribution::Uniform {
+                    min,
+                    max: max + 1.0,
+                }
+            } else {
+                Distribution::Uniform { min, max }
+            },
+        ))
+    }
+
+    /// `mean` and `sd` > 0 of a normal distribution, in the parameter's units; not
+    /// for counts.
+    fn normal(&self, m: &S<Scalar>, s: &S<Scalar>) -> Result<Column, StudyError> {
+        let (ctx, name, field) = (self.ctx, self.name, self.field);
+        let (p, mean) = self.scalar(m, "mean")?;
+        let sd = ctx.quantity(s, p.dimension, &format!("{field}.sd"))?;
+        if p.integer || sd <= 0.0 {
+            return Err(ctx.err(
+                Some(at(&s.referenced)),
+                &format!("{field}.sd"),
+                if p.integer {
+                    format!("{name} is a count; give min and max (or choices), not mean and sd")
+                } else {
+                    format!("{sd} is not allowed: a standard deviation > 0")
+                },
+            ));
+        }
+        Ok(Column::Scalar(p, Distribution::Normal { mean, sd }))
     }
 }

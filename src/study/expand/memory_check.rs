@@ -149,10 +149,9 @@ fn check(
             Some(places.sample_rate),
             "sample_rate",
             format!(
-                "fewer distinct speeds and mechanism bodies ({} ideal references now, each \
-                 held for the whole run), or a lower sample_rate or a shorter duration \
-                 ({} samples per case now)",
-                shape.references, shape.samples
+                "a lower sample_rate or a shorter duration ({} samples per case now: the \
+                 run keeps at least two ideal references per worker, of {} in all)",
+                shape.samples, shape.references
             ),
         ),
         Largest::CaseTable => (

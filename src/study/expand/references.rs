@@ -24,6 +24,7 @@ pub(super) fn reference_of(p: &CaseParams) -> CaseParams {
         location: Site::Ideal,
         bearing: Default::default(),
         housing: None,
+        noise_realization: 0,
         ..p.clone()
     }
 }
@@ -42,6 +43,7 @@ pub(super) fn reference_key(p: &CaseParams) -> ReferenceKey {
         speed,
         gravity,
         housing: _,
+        noise_realization: _,
     } = p;
     let crate::mechanism::MechanismParams {
         crank_length,

@@ -8,7 +8,33 @@ use crate::signal::sensor::{Noise, Sensor, Transducer, CLEAN_SUFFIX};
 use crate::simulate::Sampling;
 use crate::study::config::{SensorSection, S};
 use crate::study::units::Dimension;
-use crate::study::StudyError;
+use crate::study::{Case, StudyError};
+
+/// Refuses a case of another noise realisation than 0 (`noise_realization`, set by an
+/// axis, a design or a case) when no sensor of the study has `noise:`: the realisation
+/// would change nothing.
+pub(super) fn check_realizations(
+    ctx: &Ctx<'_>,
+    sensors: &[Sensor],
+    cases: &[Case],
+) -> Result<(), StudyError> {
+    if sensors.iter().any(|s| s.noise.is_some()) {
+        return Ok(());
+    }
+    match cases.iter().find(|c| c.params.noise_realization != 0) {
+        Some(case) => Err(ctx.err(
+            None,
+            "noise_realization",
+            format!(
+                "{} (case {}) draws another realisation of the sensors' noise, and no sensor \
+                 has `noise:`; give a sensor `noise: {{snr_db: ..., seed: ...}}` or leave \
+                 noise_realization out",
+                case.params.noise_realization, case.id
+            ),
+        )),
+        None => Ok(()),
+    }
+}
 
 /// The signal-to-noise ratios (dB) a sensor's noise may have: above 300 dB the noise's
 /// amplitude, 10^(−SNR/20) of the signal's, is below 10^−15, the float64 rounding of the

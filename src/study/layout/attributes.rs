@@ -9,14 +9,27 @@ use crate::study::{Shard, Study};
 use super::{StudyFingerprint, MODEL_CONVENTIONS};
 
 /// The root attributes of the file of `study` (or of `shard` of it) holding
-/// `shard_rows` cases.
+/// `shard_rows` cases: provenance, [`study_attributes`] and [`section_attributes`].
 pub(super) fn root_attributes(
     study: &Study,
     shard_rows: usize,
     shard: Option<Shard>,
 ) -> Vec<(String, AttrValue)> {
     let mut attributes = provenance();
-    attributes.extend([
+    attributes.extend(study_attributes(study, shard_rows, shard));
+    attributes.extend(section_attributes(study));
+    attributes
+}
+
+/// What every study file says of its study: name, grid, cases (of the study and in
+/// this file, and the `shard`), model conventions, solver, sampling (s, Hz), how
+/// spectra are made, effects and the study's fingerprint.
+fn study_attributes(
+    study: &Study,
+    shard_rows: usize,
+    shard: Option<Shard>,
+) -> Vec<(String, AttrValue)> {
+    vec![
         (
             "title".to_string(),
             format!("studyrun study {}", study.name).into(),
@@ -66,7 +79,13 @@ pub(super) fn root_attributes(
             "study_fingerprint".to_string(),
             StudyFingerprint::of(study, None).hex().into(),
         ),
-    ]);
+    ]
+}
+
+/// What the optional sections of `study` add: replicates, the chaos check's
+/// threshold, the sampled design, the envelope analysis and the order analysis.
+fn section_attributes(study: &Study) -> Vec<(String, AttrValue)> {
+    let mut attributes = Vec::new();
     if let Some(r) = &study.replicates {
         attributes.extend([
             ("replicates".to_string(), (r.count as i64).into()),

@@ -4,6 +4,7 @@
 use crate::bearing::fault_label;
 use crate::mechanism::{CaseParams, Location};
 use crate::output::{Param, ParamValues, VarSpec};
+use crate::study::params::defect_race_name;
 use crate::study::{Case, Study};
 
 /// What `speed_profile` and `reference_speed_profile` hold.
@@ -59,19 +60,13 @@ pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
         spec: VarSpec::new(
             "defect_race",
             "1",
-            "race of the first defect: outer, inner or ball (none without defects)",
+            "race of the first defect: outer, inner or ball (none without a defect of \
+             nonzero depth)",
         ),
         values: ParamValues::Str(
             cases
                 .iter()
-                .map(|c| {
-                    c.params
-                        .bearing
-                        .defects
-                        .first()
-                        .map_or("none", |d| d.race.name())
-                        .to_string()
-                })
+                .map(|c| defect_race_name(&c.params).to_string())
                 .collect(),
         ),
     });
