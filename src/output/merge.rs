@@ -95,6 +95,36 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
     ensure(!shards.is_empty(), || {
         "merge needs at least one shard file".into()
     })?;
+    check_inputs(output, shards)?;
+    // Nothing replaced that is not ours: no shard, no FIFO or link, and with --force
+    // only a study file; checked again under the lock.
+    let inputs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    super::overwrite::check_output(output, force, &inputs)?;
+    let _lock = OutputLock::acquire(output)?;
+    super::overwrite::check_output(output, force, &inputs)?;
+    let readers = open_shards(shards)?;
+    let (order, expected) = case_order(&readers, shards)?;
+    let shard_order = shard_orders(&readers);
+    // Every value of every shard read and its checksums checked before anything is
+    // copied (this also checks that reading the cases below cannot crash).
+    for (r, path) in readers.iter().zip(shards) {
+        r.verify().map_err(OutputError::file(path))?;
+    }
+
+    let layout = merged_layout(
+        &readers,
+        &order,
+        &shard_order,
+        expected,
+        (output, shards, force),
+    );
+    write_merged(output, shards, &readers, &order, &shard_order, &layout)?;
+    Ok(order.len())
+}
+
+/// Refuses shards that are partial files, have a journal beside them, are given twice
+/// or are the output itself.
+fn check_inputs(output: &Path, shards: &[PathBuf]) -> Result<(), OutputError> {
     for (k, p) in shards.iter().enumerate() {
         let name = p
             .file_name()
@@ -133,12 +163,11 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             format!("{} is both a shard and the merged output", p.display())
         })?;
     }
-    // Nothing replaced that is not ours: no shard, no FIFO or link, and with --force
-    // only a study file; checked again under the lock.
-    let inputs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
-    super::overwrite::check_output(output, force, &inputs)?;
-    let _lock = OutputLock::acquire(output)?;
-    super::overwrite::check_output(output, force, &inputs)?;
+    Ok(())
+}
+
+/// The shards opened: none with a pending case, all of one study and layout.
+fn open_shards(shards: &[PathBuf]) -> Result<Vec<StudyReader>, OutputError> {
     let readers: Vec<StudyReader> = shards
         .iter()
         .map(|p| StudyReader::open(p).map_err(OutputError::file(p)))
@@ -175,8 +204,21 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
         }
     }
 
+    Ok(readers)
+}
+
+/// Where a case of the merged file comes from: `(case id, shard, row)`.
+type CasePlace = (u64, usize, usize);
+
+/// `(case id, shard, row)` of every case, sorted by id, and the study's case count:
+/// refused unless the ids are exactly `0..N-1`, each in one shard.
+fn case_order(
+    readers: &[StudyReader],
+    shards: &[PathBuf],
+) -> Result<(Vec<CasePlace>, usize), OutputError> {
+    let attr = |r: &StudyReader, name: &str| r.attribute(name).cloned();
     // (shard, row) of every case, sorted by case id.
-    let mut order: Vec<(u64, usize, usize)> = readers
+    let mut order: Vec<CasePlace> = readers
         .iter()
         .enumerate()
         .flat_map(|(s, r)| {
@@ -221,16 +263,24 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
         )));
     }
 
+    Ok((order, expected))
+}
+
+/// Where each of the first shard's variables is in each shard.
+struct Order {
+    series: Vec<usize>,
+    spectra: Vec<usize>,
+    metrics: Vec<usize>,
+    replicate_metrics: Vec<usize>,
+    revolution_metrics: Vec<usize>,
+    order_spectra: Vec<usize>,
+    parameters: Vec<usize>,
+}
+
+/// Each shard's variables in the first shard's order.
+fn shard_orders(readers: &[StudyReader]) -> Vec<Order> {
+    let first = readers[0].layout();
     // Each shard's variables in the first shard's order.
-    struct Order {
-        series: Vec<usize>,
-        spectra: Vec<usize>,
-        metrics: Vec<usize>,
-        replicate_metrics: Vec<usize>,
-        revolution_metrics: Vec<usize>,
-        order_spectra: Vec<usize>,
-        parameters: Vec<usize>,
-    }
     let shard_order: Vec<Order> = readers
         .iter()
         .map(|r| {
@@ -248,12 +298,20 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             }
         })
         .collect();
-    // Every value of every shard read and its checksums checked before anything is
-    // copied (this also checks that reading the cases below cannot crash).
-    for (r, path) in readers.iter().zip(shards) {
-        r.verify().map_err(OutputError::file(path))?;
-    }
+    shard_order
+}
 
+/// The merged file's layout: the first shard's, with every case's ids, references and
+/// parameters in id order, the whole study's `file_cases`, no `shard`, and the merge's
+/// line on top of `history`.
+fn merged_layout(
+    readers: &[StudyReader],
+    order: &[CasePlace],
+    shard_order: &[Order],
+    expected: usize,
+    (output, shards, force): (&Path, &[PathBuf], bool),
+) -> Layout {
+    let first = readers[0].layout();
     let mut layout: Layout = first.clone();
     layout.case_ids = order.iter().map(|o| o.0).collect();
     layout.reference_index = order
@@ -303,6 +361,19 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
             .attributes
             .push(("history".to_owned(), AttrValue::Str(line))),
     }
+    layout
+}
+
+/// Writes the merged file into the output's partial file, the references and cases
+/// copied from the shards, and renames it to `output` when complete.
+fn write_merged(
+    output: &Path,
+    shards: &[PathBuf],
+    readers: &[StudyReader],
+    order: &[CasePlace],
+    shard_order: &[Order],
+    layout: &Layout,
+) -> Result<(), OutputError> {
     let (_, partial) = side_paths(output);
     ensure(!partial.exists(), || {
         format!(
@@ -312,7 +383,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
         )
     })?;
     let to_partial = OutputError::file(&partial);
-    let mut writer = StudyWriter::create(&partial, &layout).map_err(OutputError::file(&partial))?;
+    let mut writer = StudyWriter::create(&partial, layout).map_err(OutputError::file(&partial))?;
     let mut unfinished = RemoveOnDrop(Some(&partial));
     for k in 0..layout.reference_ids.len() {
         let series = readers[0]
@@ -367,7 +438,7 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
         output,
     ))?;
     unfinished.0 = None;
-    Ok(order.len())
+    Ok(())
 }
 
 /// The merge's partial file, removed when the merge stops before renaming it.
