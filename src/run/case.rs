@@ -99,22 +99,7 @@ pub(crate) fn run_case(
         Ok(out) => out,
         Err(message) => return failed(message, cost),
     };
-    let dt = 1.0 / study.sampling.sample_rate;
-    let mut sensor_series = Vec::with_capacity(2 * study.sensors.len());
-    for (index, sensor) in study.sensors.iter().enumerate() {
-        let input = out
-            .channel(sensor.channel)
-            .expect("sensor channels are validated");
-        let (noisy, clean) = sensor.measure(
-            input,
-            dt,
-            study.analysis_window(),
-            case.id,
-            params.noise_realization,
-            index,
-        );
-        sensor_series.extend([noisy, clean]);
-    }
+    let sensor_series = measure_sensors(study, case, &out);
     let analysis = analyse(
         params,
         &out,
@@ -146,16 +131,7 @@ pub(crate) fn run_case(
     let series = stored_series(study, out.channels, sensor_series);
     metrics.push(start.elapsed().as_secs_f64());
     if let Some(r) = replicates {
-        metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
-        if study.chaos_check {
-            let chaotic = if r.horizon.is_nan() {
-                f64::NAN
-            } else {
-                f64::from(u8::from(r.horizon < study.sampling.duration))
-            };
-            metrics.extend([r.horizon, chaotic]);
-        }
-        metrics.extend(r.values);
+        push_replicates(study, r, &mut metrics);
     }
     metrics.extend(per_revolution.into_iter().flatten());
     metrics.extend(order_spectra.into_iter().flatten());
@@ -169,6 +145,43 @@ pub(crate) fn run_case(
         metrics,
         cost,
     }
+}
+
+/// Each sensor's noisy and noise-free series of the case's simulated `out`
+/// (docs/model.md §7.8), in sensor order.
+fn measure_sensors(study: &Study, case: &Case, out: &CaseOutput) -> Vec<Vec<f64>> {
+    let dt = 1.0 / study.sampling.sample_rate;
+    let mut sensor_series = Vec::with_capacity(2 * study.sensors.len());
+    for (index, sensor) in study.sensors.iter().enumerate() {
+        let input = out
+            .channel(sensor.channel)
+            .expect("sensor channels are validated");
+        let (noisy, clean) = sensor.measure(
+            input,
+            dt,
+            study.analysis_window(),
+            case.id,
+            case.params.noise_realization,
+            index,
+        );
+        sensor_series.extend([noisy, clean]);
+    }
+    sensor_series
+}
+
+/// Appends the replicates' summaries, with the chaos check its horizon and verdict
+/// (1 when the horizon falls before the end), then every replicate's values.
+fn push_replicates(study: &Study, r: ReplicateResults, metrics: &mut Vec<f64>) {
+    metrics.extend(r.summaries.iter().flat_map(|s| [s.mean, s.std, s.ci95]));
+    if study.chaos_check {
+        let chaotic = if r.horizon.is_nan() {
+            f64::NAN
+        } else {
+            f64::from(u8::from(r.horizon < study.sampling.duration))
+        };
+        metrics.extend([r.horizon, chaotic]);
+    }
+    metrics.extend(r.values);
 }
 
 /// The series of a case the file stores, from its full-rate `channels` (one per
