@@ -346,11 +346,34 @@ fn read_ids(file: &File, name: &str, path: &Path) -> Result<Vec<u64>, StudyFileE
 
 /// Rebuilds the [`Layout`] of an open study file at `path`.
 pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileError> {
-    let format = |reason: String, variable: &str| StudyFileError::Format {
+    let format = format_error(path);
+    check_format_version(file, path)?;
+    let read = |name: &str| file.dataset(name).at(path, name);
+    let mut layout = coordinates(file, path)?;
+    read_variables(file, path, &mut layout)?;
+    layout.attributes = root_attributes(file, path)?;
+    let status = read(STATUS)?;
+    check_type(&status, path, STATUS, "integers", |t| {
+        matches!(t, TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_))
+    })?;
+    restore_written_times(&mut layout);
+    layout.validate().map_err(|reason| format(reason, "/"))?;
+    check_case_ids(&layout).map_err(|reason| format(reason, CASE))?;
+    Ok(layout)
+}
+
+/// The error of a file that is no readable study file, at `variable`.
+fn format_error(path: &Path) -> impl Fn(String, &str) -> StudyFileError + '_ {
+    move |reason, variable| StudyFileError::Format {
         path: path.to_owned(),
         variable: variable.to_owned(),
         reason,
-    };
+    }
+}
+
+/// Refuses a file without this build's study file format attribute.
+fn check_format_version(file: &File, path: &Path) -> Result<(), StudyFileError> {
+    let format = format_error(path);
     match attributes::read(file, FORMAT_ATTR) {
         Ok(AttrValue::I64(FORMAT_VERSION)) => {}
         Ok(other) => {
@@ -367,8 +390,14 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         }
     }
 
+    Ok(())
+}
+
+/// The layout's coordinates (cases, times, frequencies, references, replicates,
+/// revolutions, orders, each case's reference), its variables still to be read.
+fn coordinates(file: &File, path: &Path) -> Result<Layout, StudyFileError> {
     let read = |name: &str| file.dataset(name).at(path, name);
-    let mut layout = Layout {
+    Ok(Layout {
         case_ids: read_ids(file, CASE, path)?,
         // A file without series has no `time` coordinate.
         times: match file.dataset(TIME) {
@@ -401,8 +430,13 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         reference_index: read_ids(file, REFERENCE_INDEX, path)?,
         attributes: Vec::new(),
         storage: Storage::default(),
-    };
+    })
+}
 
+/// Every variable with a `studyrun_role` into `layout`, checked (type, shape, the
+/// attributes' digest), and the storage of the first chunked row variable.
+fn read_variables(file: &File, path: &Path, layout: &mut Layout) -> Result<(), StudyFileError> {
+    let format = format_error(path);
     let mut storage_from: Option<Dataset> = None;
     for name in member_names(file).at(path, "/")? {
         let ds = match file.dataset(&name) {
@@ -472,6 +506,13 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         layout.storage = read_storage(&ds).at(path, &ds.name())?;
     }
 
+    Ok(())
+}
+
+/// The study's root attributes in creation order: netCDF's own (`_NCProperties`, ...)
+/// and what is neither a string nor a number (arrays, other types) left out.
+fn root_attributes(file: &File, path: &Path) -> Result<Vec<(String, AttrValue)>, StudyFileError> {
+    let mut attributes = Vec::new();
     let names = file
         .attr_names_by(IndexType::CreationOrder, IterationOrder::Increasing)
         .or_else(|_| file.attr_names())
@@ -483,18 +524,11 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
         .filter(|n| n != FORMAT_ATTR && !n.starts_with('_'))
     {
         if let Ok(value) = attributes::read_value(file, &name).at(path, &name)? {
-            layout.attributes.push((name, value));
+            attributes.push((name, value));
         }
     }
 
-    let status = read(STATUS)?;
-    check_type(&status, path, STATUS, "integers", |t| {
-        matches!(t, TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_))
-    })?;
-    restore_written_times(&mut layout);
-    layout.validate().map_err(|reason| format(reason, "/"))?;
-    check_case_ids(&layout).map_err(|reason| format(reason, CASE))?;
-    Ok(layout)
+    Ok(attributes)
 }
 
 /// Checks the case ids against the root attributes of a study's file: every id below
