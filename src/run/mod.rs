@@ -138,15 +138,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     check_paths(study, &opts.output)?;
     let _lock = OutputLock::acquire(&opts.output)?;
     let layout = study_layout(study, &rows, opts.shard);
-    let header = JournalHeader {
-        fingerprint: StudyFingerprint::of(study, opts.shard).0,
-        n_time: layout.times.len() as u64,
-        n_series: layout.series.len() as u64,
-        n_freq: layout.frequencies.len() as u64,
-        n_spectra: layout.spectra.len() as u64,
-        n_metrics: layout.n_metric_values() as u64,
-        storage: layout.storage,
-    };
+    let header = journal_header(study, opts.shard, &layout);
     let (journal_path, _) = side_paths(&opts.output);
     let begin = match decide_start(study, opts, &header, rows.len(), start)? {
         Start::Complete(summary) => return Ok(summary),
@@ -204,15 +196,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     })
     .map(|worker_stats| worker_stats.add_to(&mut tally.stats))?;
     progress.finish();
-    let partial_path = data.path(&opts.output);
-    let cpu = thread_cpu();
-    writer.finish().map_err(OutputError::file(&partial_path))?;
-    tally.stats.finish = thread_cpu() - cpu;
-    // On the disk before it is declared complete: the file, then its new name; then
-    // the journal goes.
-    rename(&partial_path, &opts.output)?;
-    drop(journal);
-    remove_durably(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
+    tally.stats.finish = finish_file(writer, journal, data, &opts.output)?;
     Ok(RunSummary {
         cases: rows.len(),
         ok: tally.ok,
@@ -223,6 +207,40 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         wall_time: start.elapsed().as_secs_f64(),
         stats: tally.stats,
     })
+}
+
+/// The journal header of `study` run as `shard` into a file of `layout`: the study's
+/// fingerprint and the sizes of a case's record.
+fn journal_header(study: &Study, shard: Option<Shard>, layout: &Layout) -> JournalHeader {
+    JournalHeader {
+        fingerprint: StudyFingerprint::of(study, shard).0,
+        n_time: layout.times.len() as u64,
+        n_series: layout.series.len() as u64,
+        n_freq: layout.frequencies.len() as u64,
+        n_spectra: layout.spectra.len() as u64,
+        n_metrics: layout.n_metric_values() as u64,
+        storage: layout.storage,
+    }
+}
+
+/// Finishes the partial file `data` of `output` and declares it complete: on the disk
+/// before it is renamed, the file, then its new name; then the journal goes. Returns
+/// the CPU time the file's finish took (s).
+fn finish_file(
+    writer: StudyWriter,
+    journal: JournalWriter,
+    data: DataFile,
+    output: &Path,
+) -> Result<f64, RunError> {
+    let (journal_path, _) = side_paths(output);
+    let partial_path = data.path(output);
+    let cpu = thread_cpu();
+    writer.finish().map_err(OutputError::file(&partial_path))?;
+    let finish = thread_cpu() - cpu;
+    rename(&partial_path, output)?;
+    drop(journal);
+    remove_durably(&journal_path).map_err(OutputError::io("remove", &journal_path))?;
+    Ok(finish)
 }
 
 /// The journal a run starts with: its own (fresh), or an interrupted run's.
