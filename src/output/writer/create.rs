@@ -55,29 +55,21 @@ pub(super) const TIME_ATTRIBUTES: [(&str, &str); 4] = [
 ];
 
 impl Creator<'_> {
-    pub(super) fn build(&self) -> Result<(), StudyFileError> {
+    /// The `[case]` variables every file has: each case's reference row, its status
+    /// (a CF flag variable) and its error message.
+    fn case_variables(&self, case: &Dataset) -> Result<(), StudyFileError> {
         let l = self.layout;
-        attributes::write(self.file, FORMAT_ATTR, &FORMAT_VERSION.into())
-            .at(self.path, FORMAT_ATTR)?;
-        for (name, value) in &l.attributes {
-            attributes::write(self.file, name, value).at(self.path, name)?;
-        }
-        let (case, time, frequency, reference) = self.coordinates()?;
-
-        for p in &l.parameters {
-            self.parameter(p, Role::Parameter, &case)?;
-        }
         let spec = VarSpec::new(
             REFERENCE_INDEX,
             "1",
             "row of the reference run this case is compared with",
         );
         let ds = self.with_data(&spec.name, &ids32(&l.reference_index))?;
-        self.finish_var(&ds, &spec, None, &[&case])?;
+        self.finish_var(&ds, &spec, None, &[case])?;
 
         let spec = VarSpec::new(STATUS, "1", "case status");
         let ds = self.empty::<i8>(STATUS, &[l.n_cases()], Status::Pending.code())?;
-        self.finish_var(&ds, &spec, None, &[&case])?;
+        self.finish_var(&ds, &spec, None, &[case])?;
         let flags: Vec<i8> = Status::ALL.iter().map(|s| s.code()).collect();
         ds.new_attr_builder()
             .with_data(&flags[..])
@@ -95,8 +87,25 @@ impl Creator<'_> {
         let ds = self.with_data(ERROR_MESSAGE, &empty)?;
         text::write_digest(&ds, text::DIGEST_ATTR, &vec![""; l.n_cases()])
             .at(self.path, ERROR_MESSAGE)?;
-        self.finish_var(&ds, &spec, None, &[&case])?;
+        self.finish_var(&ds, &spec, None, &[case])?;
 
+        Ok(())
+    }
+
+    /// Creates every dimension and variable of the layout, with the root attributes.
+    pub(super) fn build(&self) -> Result<(), StudyFileError> {
+        let l = self.layout;
+        attributes::write(self.file, FORMAT_ATTR, &FORMAT_VERSION.into())
+            .at(self.path, FORMAT_ATTR)?;
+        for (name, value) in &l.attributes {
+            attributes::write(self.file, name, value).at(self.path, name)?;
+        }
+        let (case, time, frequency, reference) = self.coordinates()?;
+
+        for p in &l.parameters {
+            self.parameter(p, Role::Parameter, &case)?;
+        }
+        self.case_variables(&case)?;
         for spec in &l.metrics {
             let ds = self.empty::<f64>(&spec.name, &[l.n_cases()], f64::NAN)?;
             self.finish_var(&ds, spec, Some(Role::Metric), &[&case])?;
