@@ -9,6 +9,8 @@
 //!
 //! Comments and `#[cfg(test)]` modules are left out: a doc link may point anywhere,
 //! and a unit test may build its fixtures from any layer.
+//!
+//! It also keeps files and functions below the sizes past which they must be split.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -150,4 +152,77 @@ fn an_import_that_climbs_is_found() {
     );
     let expected: BTreeSet<String> = ["run", "output"].map(String::from).into();
     assert_eq!(imports(&code), expected);
+}
+
+/// Lines past which a source file must be split (tables of constants aside).
+const MAX_FILE_LINES: usize = 850;
+/// Lines past which a function must be split.
+const MAX_FUNCTION_LINES: usize = 100;
+/// Files that are tables of constants.
+const TABLES: [&str; 1] = ["solve/tableau.rs"];
+
+/// `(name, first line, lines)` of every `fn` with a body in `text`, by brace count
+/// (braces in strings and comments aside).
+fn functions(text: &str) -> Vec<(String, usize, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut found = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let code = line.split("//").next().unwrap_or_default();
+        let Some(at) = code.find("fn ") else { continue };
+        if at > 0 && !code[..at].ends_with(' ') {
+            continue;
+        }
+        let name: String = code[at + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let (mut depth, mut opened) = (0i64, false);
+        for (j, l) in lines[i..].iter().enumerate() {
+            let mut in_string = false;
+            for c in l.split("//").next().unwrap_or_default().chars() {
+                match c {
+                    '"' => in_string = !in_string,
+                    '{' if !in_string => (depth, opened) = (depth + 1, true),
+                    '}' if !in_string => depth -= 1,
+                    _ => {}
+                }
+            }
+            if !opened && l.trim_end().ends_with(';') {
+                break;
+            }
+            if opened && depth <= 0 {
+                found.push((name.clone(), i + 1, j + 1));
+                break;
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_file_or_function_grows_past_its_ceiling() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    sources(&src, &mut files);
+    let mut long = Vec::new();
+    for file in &files {
+        let shown = file.strip_prefix(&src).unwrap().display().to_string();
+        let text = std::fs::read_to_string(file).unwrap();
+        let n = text.lines().count();
+        if n > MAX_FILE_LINES && !TABLES.contains(&shown.as_str()) {
+            long.push(format!("{shown}: {n} lines"));
+        }
+        for (name, at, n) in functions(&text) {
+            if n > MAX_FUNCTION_LINES {
+                long.push(format!("{shown}:{at}: fn {name}, {n} lines"));
+            }
+        }
+    }
+    assert!(long.is_empty(), "split these:\n{}", long.join("\n"));
+}
+
+#[test]
+fn the_function_counter_counts_a_body() {
+    let text = "fn a() {\n    let s = \"}\";\n    {\n    }\n}\nfn b();\n";
+    assert_eq!(functions(text), vec![("a".to_string(), 1, 5)]);
 }
