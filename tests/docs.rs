@@ -383,5 +383,8 @@ fn the_readme_stays_short() {
     // Details belong in docs/: the README is the first screen and the map.
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
     let lines = std::fs::read_to_string(&path).unwrap().lines().count();
-    assert!(lines <= 250, "README.md has {lines} lines; move details to docs/");
+    assert!(
+        lines <= 250,
+        "README.md has {lines} lines; move details to docs/"
+    );
 }
