@@ -255,6 +255,21 @@ def written_times(ds):
     return out.set_coords([name for name in ds.coords if name not in out.coords])
 
 
+# The attribute holding the checksum of a string variable's strings in its own file:
+# studyrun checks it when it reads the file; a set of shards opened together has no
+# one file whose strings it sums.
+STRINGS_CHECKSUM = "studyrun_crc32"
+
+
+def _shard_part(ds):
+    """One shard as open_shards combines it: written_times, and its string variables
+    without their file's STRINGS_CHECKSUM."""
+    ds = written_times(ds)
+    for var in ds.variables.values():
+        var.attrs.pop(STRINGS_CHECKSUM, None)
+    return ds
+
+
 def open_shards(paths, lazy=None, partial=False):
     """Open the shard files of one study (`studyrun ... --shard K/N`) as one Dataset
     ordered by case id: the variables and values `studyrun merge` would write, without
@@ -263,7 +278,8 @@ def open_shards(paths, lazy=None, partial=False):
     `paths` is a list of files in any order, or a glob pattern (`"part*.h5"`). Variables
     over `case` are concatenated and sorted by case id; the others (the `reference`
     runs, `time`, `frequency`) must be the same in every shard and are kept once (times
-    a tool's datetime round trip moved by a nanosecond are put back: written_times). Root
+    a tool's datetime round trip moved by a nanosecond are put back: written_times;
+    the checksum of each file's strings, STRINGS_CHECKSUM, is dropped). Root
     attributes that every shard has alike are kept, `history` holds the shards' lines,
     `file_cases` becomes the number of cases opened and `shard` is empty, as in a
     merged file (`created` and other differing attributes are dropped).
@@ -314,13 +330,13 @@ def open_shards(paths, lazy=None, partial=False):
     try:
         if lazy:
             ds = xr.open_mfdataset(
-                paths, combine="nested", preprocess=written_times, **OPEN_OPTIONS, **combine
+                paths, combine="nested", preprocess=_shard_part, **OPEN_OPTIONS, **combine
             )
         else:
             parts = []
             for path in paths:
                 with xr.open_dataset(path, **OPEN_OPTIONS) as part:
-                    parts.append(written_times(part.load()))
+                    parts.append(_shard_part(part.load()))
             ds = xr.combine_nested(parts, **combine)
     except ValueError as e:
         if "study_fingerprint" in str(e):

@@ -234,6 +234,32 @@ fn what_a_design_may_not_contain_is_refused_with_the_rule() {
             design("lhs", 8, "    colour: {min: 1, max: 2}\n"),
             vec!["design.parameters.colour.min", "unknown parameter"],
         ),
+        // Every value a column may draw is valid for the base case, drawn or not.
+        (
+            design("lhs", 8, "    ball_count: {min: 2, max: 9}\n"),
+            vec!["design.parameters.ball_count.min", "2 is not allowed", "every row may draw it"],
+        ),
+        (
+            design("lhs", 8, "    ball_count: {min: 9, max: 20}\n"),
+            vec!["design.parameters.ball_count.max", "at most 13 balls fit"],
+        ),
+        (
+            design("lhs", 8, "    ball_count: {choices: [9, 30]}\n"),
+            vec!["design.parameters.ball_count.choices[1]", "at most 13 balls fit"],
+        ),
+        (
+            design("lhs", 8, "    stiffness: {mean: 9.57e9, sd: 2e9}\n"),
+            vec!["design.parameters.stiffness.mean - 6.3 sd", "stiffness"],
+        ),
+        // Valid at its ends one by one, not together: each row is checked whole.
+        (
+            design(
+                "lhs",
+                64,
+                "    ball_count: {min: 9, max: 13}\n    outer_race_diameter: {min: \"46 mm\", max: \"50 mm\"}\n",
+            ),
+            vec!["design.parameters.", "balls fit", "(case "],
+        ),
         (
             design("lhs", 8, "    rpm: {choices: [300, 300]}\n"),
             vec!["design.parameters.rpm.choices[1]", "repeats"],

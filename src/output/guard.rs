@@ -17,8 +17,11 @@
 //! libhdf5 starts from the same state, reads the same bytes and takes the same paths.
 //! The fork holds hdf5-metno's library lock, so no other thread is inside libhdf5 at
 //! that moment (everything the reads initialise lazily is initialised under that lock
-//! too); the child does nothing but the reads and leaves with `_exit`, so it flushes
-//! and closes nothing of this process's files.
+//! too); before the lock is let go the child closes every descriptor it inherited but
+//! those on the file it checks (so it holds none of this process's locks on other
+//! files when another thread reopens one), then does nothing but the reads, which open
+//! their file anew, and leaves with `_exit`, so it flushes and closes nothing of this
+//! process's files.
 //!
 //! The child has [`deadline`] to finish (`STUDYRUN_CHECK_TIMEOUT`, seconds, sets
 //! another). Systems without `fork` read without the check.
@@ -54,35 +57,44 @@ pub(super) fn deadline(path: &Path, per_byte: bool) -> Duration {
     Duration::from_secs(120 + mb)
 }
 
-/// Runs `reads` in a forked child process and says whether it survived (see the
-/// module doc). Its result is not passed back: only whether it crashed. `reads` runs
+/// Runs `reads` of `file` in a forked child process and says whether it survived
+/// (see the module doc). Its result is not passed back: only whether it crashed. `reads` runs
 /// only in the child, never in this process.
 #[cfg(unix)]
-pub(super) fn check<E>(timeout: Duration, reads: impl FnOnce() -> Result<(), E>) -> Checked {
+pub(super) fn check<E>(
+    timeout: Duration,
+    file: &Path,
+    reads: impl FnOnce() -> Result<(), E>,
+) -> Checked {
+    use std::os::unix::fs::MetadataExt;
     use std::time::Instant;
 
+    let file = std::fs::metadata(file).ok().map(|m| (m.dev(), m.ino()));
     // The fork holds hdf5-metno's (reentrant) library lock, and the child never
     // releases it: no other thread was inside libhdf5 at the fork, and the child's own
     // libhdf5 calls take the lock again without waiting (releasing it could mean waking
     // a thread that was waiting for it, which the child does not have).
     let pid = hdf5::sync::sync(|| {
+        // The child says on this pipe when it has closed what it inherited; until then
+        // this process keeps the library lock, so no thread of it opens or closes an
+        // HDF5 file while the child still shares its descriptors and their locks.
+        let mut pipe = [-1; 2];
+        // SAFETY: `pipe` is a valid array of two descriptors to fill.
+        if unsafe { libc::pipe(pipe.as_mut_ptr()) } != 0 {
+            return -1;
+        }
+        let [r, w] = pipe;
         // SAFETY: fork in a process that may have other threads: the child only runs
         // `reads` (libhdf5 calls under the lock it holds, and memory allocation, which
         // glibc makes fork-safe) and leaves with `_exit`, which runs no exit handlers
         // and flushes no stdio or HDF5 buffers.
         let pid = unsafe { libc::fork() };
         if pid == 0 {
-            // The inherited descriptors share this process's open files and the HDF5
-            // file locks (flock) on them: closed at once, so that a file this process
-            // closes meanwhile is not kept locked by the child. The reads open their
-            // file anew. (`close_range`, else a loop: both async-signal-safe.)
-            // SAFETY: closing descriptors in the child only.
+            // SAFETY: closing descriptors and writing to the pipe in the child only.
             unsafe {
-                if libc::syscall(libc::SYS_close_range, 3u32, u32::MAX, 0u32) != 0 {
-                    for fd in 3..4096 {
-                        libc::close(fd);
-                    }
-                }
+                close_inherited(w, file);
+                libc::write(w, [1u8].as_ptr().cast(), 1);
+                libc::close(w);
             }
             let code = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(reads)) {
                 Ok(Ok(())) => 0,
@@ -91,6 +103,19 @@ pub(super) fn check<E>(timeout: Duration, reads: impl FnOnce() -> Result<(), E>)
             };
             // SAFETY: ends the child at once, see above.
             unsafe { libc::_exit(code) };
+        }
+        // SAFETY: our ends of the pipe; the read returns at the child's byte or, if it
+        // never writes one (a failed fork, a child killed first), at end of file.
+        unsafe {
+            libc::close(w);
+            if pid > 0 {
+                let mut byte = 0u8;
+                while libc::read(r, (&mut byte as *mut u8).cast(), 1) < 0
+                    && std::io::Error::last_os_error().kind() == std::io::ErrorKind::Interrupted
+                {
+                }
+            }
+            libc::close(r);
         }
         pid
     });
@@ -149,9 +174,55 @@ pub(super) fn check<E>(timeout: Duration, reads: impl FnOnce() -> Result<(), E>)
     }
 }
 
+/// The descriptors [`close_inherited`] looks at one by one; those above are closed
+/// whatever they are.
+#[cfg(unix)]
+const SCANNED_DESCRIPTORS: i32 = 1024;
+
+/// Closes every descriptor the child inherited but `pipe` (and stdin, stdout, stderr)
+/// and those open on `file` (device, inode): the others share this process's open
+/// files and the HDF5 file locks (flock) on them, which a file this process closes
+/// meanwhile would otherwise keep. Those on `file` stay, as libhdf5 reuses its open
+/// file for the same inode: were they closed, the child's reads of a file this process
+/// has open would fail at once (and check nothing); the locks they share are this
+/// process's own on the file being checked. (`fstat`, `close`, `close_range`: all
+/// async-signal-safe.)
+///
+/// # Safety
+/// Only for a forked child, which uses none of the descriptors it closes.
+#[cfg(unix)]
+unsafe fn close_inherited(pipe: i32, file: Option<(u64, u64)>) {
+    let close_range = |from: i32, to: i32| {
+        if from <= to && libc::syscall(libc::SYS_close_range, from as u32, to as u32, 0u32) != 0 {
+            for fd in from..=to.min(4095) {
+                libc::close(fd);
+            }
+        }
+    };
+    for fd in 3..SCANNED_DESCRIPTORS {
+        let mut st: libc::stat = std::mem::zeroed();
+        let on_file = libc::fstat(fd, &mut st) == 0
+            && file.is_some_and(|(dev, ino)| st.st_dev == dev && st.st_ino == ino);
+        if fd != pipe && !on_file {
+            libc::close(fd);
+        }
+    }
+    let above = SCANNED_DESCRIPTORS;
+    if pipe >= above {
+        close_range(above, pipe - 1);
+        close_range(pipe + 1, i32::MAX);
+    } else {
+        close_range(above, i32::MAX);
+    }
+}
+
 /// Without `fork`: no check.
 #[cfg(not(unix))]
-pub(super) fn check<E>(_timeout: Duration, _reads: impl FnOnce() -> Result<(), E>) -> Checked {
+pub(super) fn check<E>(
+    _timeout: Duration,
+    _file: &Path,
+    _reads: impl FnOnce() -> Result<(), E>,
+) -> Checked {
     Checked::Survived
 }
 
@@ -180,9 +251,15 @@ mod tests {
     #[test]
     fn a_crashing_child_is_reported_and_a_surviving_one_is_not() {
         let t = Duration::from_secs(30);
-        assert_eq!(check(t, || Ok::<(), ()>(())), Checked::Survived);
-        assert_eq!(check(t, || Err::<(), _>("an error")), Checked::Survived);
-        let crashed = check(t, || {
+        assert_eq!(
+            check(t, Path::new("/nonexistent"), || Ok::<(), ()>(())),
+            Checked::Survived
+        );
+        assert_eq!(
+            check(t, Path::new("/nonexistent"), || Err::<(), _>("an error")),
+            Checked::Survived
+        );
+        let crashed = check(t, Path::new("/nonexistent"), || {
             // SAFETY: ends the (child) process with the signal a segfault gives (the
             // default action: Rust's stack-overflow handler would return from a raised
             // SIGSEGV, unlike from a real fault, which it hands back to the default).
@@ -196,13 +273,45 @@ mod tests {
             matches!(&crashed, Checked::Crashed(m) if m.contains("SIGSEGV")),
             "{crashed:?}"
         );
-        let hung = check(Duration::from_millis(200), || {
-            std::thread::sleep(Duration::from_secs(60));
-            Ok::<(), ()>(())
-        });
+        let hung = check(
+            Duration::from_millis(200),
+            Path::new("/nonexistent"),
+            || {
+                std::thread::sleep(Duration::from_secs(60));
+                Ok::<(), ()>(())
+            },
+        );
         assert!(
             matches!(&hung, Checked::Crashed(m) if m.contains("did not finish")),
             "{hung:?}"
         );
+    }
+
+    #[test]
+    fn the_child_reads_a_file_this_process_holds_open() {
+        // libhdf5 in the child reuses this process's open file for the same inode: its
+        // descriptor must still be there, or the reads would fail and check nothing.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("held.h5");
+        let values = [1.5, -2.0, 3.25];
+        hdf5::File::create(&path)
+            .and_then(|f| {
+                f.new_dataset_builder()
+                    .with_data(&values)
+                    .create("x")
+                    .map(|_| ())
+            })
+            .unwrap();
+        let held = hdf5::File::open(&path).unwrap();
+        let read = check(Duration::from_secs(30), &path, || {
+            let got = hdf5::File::open(&path)
+                .and_then(|f| f.dataset("x"))
+                .and_then(|d| d.read_raw::<f64>())
+                .expect("the child reads the file"); // a panic: Crashed
+            assert_eq!(got, values);
+            Ok::<(), ()>(())
+        });
+        assert_eq!(read, Checked::Survived);
+        drop(held);
     }
 }

@@ -15,6 +15,27 @@ pub const TIME: &str = "time";
 /// Units of the `time` coordinate: seconds, since a nominal reference date that CF
 /// requires of a time coordinate (the simulation has no calendar date).
 pub const TIME_UNITS: &str = "seconds since 1970-01-01 00:00:00";
+/// Whether `units` are seconds since 1970-01-01 00:00:00 UTC (date alone, time with `T`
+/// or a space, `Z` or `UTC` or a zero offset), or plain seconds.
+pub(super) fn seconds_from_the_epoch(units: &str) -> bool {
+    let (unit, date) = match units.split_once(" since ") {
+        Some((unit, date)) => (unit.trim(), Some(date.trim())),
+        None => (units.trim(), None),
+    };
+    let seconds = matches!(unit, "s" | "sec" | "secs" | "second" | "seconds");
+    let epoch = date.is_none_or(|date| {
+        let mut date = date;
+        for zone in ["Z", "UTC", "+00:00", "+0000", "+00"] {
+            date = date.strip_suffix(zone).unwrap_or(date).trim_end();
+        }
+        matches!(
+            date,
+            "1970-01-01" | "1970-01-01 00:00:00" | "1970-01-01T00:00:00" | "1970-01-01 00:00"
+        )
+    });
+    seconds && epoch
+}
+
 /// Name of the frequency dimension and its coordinate variable (f64, Hz).
 pub const FREQUENCY: &str = "frequency";
 /// Name of the reference dimension and its coordinate variable (reference ids, int32).

@@ -15,7 +15,7 @@
 //! | `error_message` | `[case]` | string | `1` | per case: why it failed, empty otherwise |
 //! | *metric* | `[case]` | f64 | caller's | per case; fill NaN |
 //! | `order` | `[order]` | f64 | `1` | at create, with order spectra: bin orders (cycles per crank revolution) |
-//! | *order spectrum* | `[case, order]` | f64 | caller's | per case, contiguous; fill NaN |
+//! | *order spectrum* | `[case, order]` | f64 | caller's | per case, whole-row chunks; fill NaN |
 //! | *series* | `[case, time]` | f64 or f32 | caller's | per case; fill NaN |
 //! | *spectrum* | `[case, frequency]` | f64 or f32 | caller's | per case; fill NaN |
 //! | *reference parameter* | `[reference]` | f64 or string | caller's | at create |
@@ -50,12 +50,14 @@
 //! are read without letting libhdf5 follow them into the file (`text`), and the reads
 //! are first done in a child process (`guard`), see [`StudyReader`].
 //!
-//! Storage: `[case, *]` and `[reference, time]` arrays are chunked one row per chunk
-//! (chunk shape `(1, len)`), so writing or reading a case touches one chunk per
-//! variable; with a deflate level above 0 they carry the shuffle and deflate (gzip)
+//! Storage: `[case, time]`, `[case, frequency]` and `[reference, time]` arrays are
+//! chunked one row per chunk (chunk shape `(1, len)`), so writing or reading a case
+//! touches one chunk per variable; with a deflate level above 0 they carry the shuffle and deflate (gzip)
 //! filters, with level 0 none. Rows are encoded by a [`ChunkEncoder`] (on any thread)
 //! and written with HDF5's direct chunk write; readers inflate them like chunks HDF5
-//! deflated itself. 1-D variables are contiguous and uncompressed.
+//! deflated itself. The other arrays (1-D, `[case, replicate]`, `[case, revolution]`,
+//! `[case, order]`) are written whole, in uncompressed chunks of whole rows. Every
+//! numeric variable carries the Fletcher-32 checksum filter.
 //! Link and attribute creation order are tracked, as netCDF-4 does.
 //!
 //! `crate::study::study_layout` gives the layout of a study's file, [`merge`] combines shard files

@@ -70,7 +70,7 @@ impl StudyReader {
     /// be damaged.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, StudyFileError> {
         let path = path.as_ref();
-        let checked = guard::check(guard::deadline(path, false), || {
+        let checked = guard::check(guard::deadline(path, false), path, || {
             Self::open_unchecked(path).and_then(|r| r.statuses().map(|_| ()))
         });
         if let Checked::Crashed(reason) = checked {
@@ -83,12 +83,9 @@ impl StudyReader {
     /// error if that crashes or does not end, so that reading them here cannot crash.
     /// Errors the reads themselves report are left for them.
     pub fn check_cases(&self) -> Result<(), StudyFileError> {
-        let checked = guard::check(guard::deadline(&self.path, true), || {
-            // SAFETY: this runs only in the forked child, in its own copy of this
-            // process's memory: the copy of `self` is moved out and dropped there
-            // (closing the file as this process will later), and the child leaves
-            // with `_exit` without touching `self` again.
-            let r: StudyReader = unsafe { std::ptr::read(self) };
+        let checked = guard::check(guard::deadline(&self.path, true), &self.path, || {
+            // The child has closed the descriptors it inherited: it opens the file anew.
+            let r = Self::open_unchecked(&self.path)?;
             (0..r.layout.n_references()).try_for_each(|k| r.read_reference(k).map(|_| ()))?;
             (0..r.layout.n_cases()).try_for_each(|row| r.read_case(row).map(|_| ()))
         });
@@ -494,11 +491,11 @@ fn read_variables(file: &File, path: &Path, layout: &mut Layout) -> Result<(), S
             Role::Spectrum => layout.spectra.push(spec),
             Role::ReferenceSeries => layout.reference_series.push(spec),
         }
-        let contiguous = matches!(
+        let written_whole = matches!(
             role,
             Role::ReplicateMetric | Role::RevolutionMetric | Role::OrderSpectrum
         );
-        if cols.is_some() && !contiguous && storage_from.is_none() {
+        if cols.is_some() && !written_whole && storage_from.is_none() {
             storage_from = Some(ds);
         }
     }
@@ -619,7 +616,7 @@ fn restore_written_times(layout: &mut Layout) {
 /// since ...`, another date) are refused rather than taken for seconds.
 fn read_times(ds: &Dataset, path: &Path) -> Result<Vec<f64>, StudyFileError> {
     let units = attributes::read_str(ds, "units").at(path, TIME)?;
-    if !seconds_from_the_epoch(&units) {
+    if !super::layout::seconds_from_the_epoch(&units) {
         return Err(StudyFileError::Format {
             path: path.to_owned(),
             variable: TIME.to_owned(),
@@ -627,27 +624,6 @@ fn read_times(ds: &Dataset, path: &Path) -> Result<Vec<f64>, StudyFileError> {
         });
     }
     read_floats(ds, path, TIME)
-}
-
-/// Whether `units` are seconds since 1970-01-01 00:00:00 UTC (date alone, time with `T`
-/// or a space, `Z` or `UTC` or a zero offset), or plain seconds.
-fn seconds_from_the_epoch(units: &str) -> bool {
-    let (unit, date) = match units.split_once(" since ") {
-        Some((unit, date)) => (unit.trim(), Some(date.trim())),
-        None => (units.trim(), None),
-    };
-    let seconds = matches!(unit, "s" | "sec" | "secs" | "second" | "seconds");
-    let epoch = date.is_none_or(|date| {
-        let mut date = date;
-        for zone in ["Z", "UTC", "+00:00", "+0000", "+00"] {
-            date = date.strip_suffix(zone).unwrap_or(date).trim_end();
-        }
-        matches!(
-            date,
-            "1970-01-01" | "1970-01-01 00:00:00" | "1970-01-01T00:00:00" | "1970-01-01 00:00"
-        )
-    });
-    seconds && epoch
 }
 
 /// Refuses dataset `name` unless its stored type is `what` (`is`): libhdf5 1.10 takes a
@@ -741,7 +717,7 @@ fn descriptive_attributes(
 
 #[cfg(test)]
 mod tests {
-    use super::seconds_from_the_epoch;
+    use super::super::layout::seconds_from_the_epoch;
 
     #[test]
     fn time_units_are_seconds_from_the_epoch_in_any_spelling() {

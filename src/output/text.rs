@@ -141,17 +141,26 @@ pub(super) fn check_digest<S: AsRef<str>>(
     Ok(())
 }
 
-/// The text attributes [`DESCRIBED_BY`] of `ds`, an absent one as "".
+/// The text attributes [`DESCRIBED_BY`] of `ds`, an absent one as "", as studyrun
+/// reads them: units of `time` that mean seconds from the epoch (a netCDF tool
+/// respells them) as [`TIME_UNITS`](super::layout::TIME_UNITS).
 pub(super) fn described_by(ds: &Dataset) -> hdf5::Result<Vec<String>> {
     let names = ds.attr_names()?;
+    let is_time = ds.name() == format!("/{}", super::layout::TIME);
     DESCRIBED_BY
         .iter()
         .map(|&a| {
-            if names.iter().any(|n| n == a) {
-                super::attributes::read_str(ds, a)
-            } else {
-                Ok(String::new())
+            if !names.iter().any(|n| n == a) {
+                return Ok(String::new());
             }
+            let value = super::attributes::read_str(ds, a)?;
+            Ok(
+                if is_time && a == "units" && super::layout::seconds_from_the_epoch(&value) {
+                    super::layout::TIME_UNITS.to_owned()
+                } else {
+                    value
+                },
+            )
         })
         .collect()
 }

@@ -5,11 +5,15 @@ every dimension (replicates, whole revolutions, order spectra, envelope analysis
   `revolution` and `order` each sit just before the first variable over them;
 - the series, spectra and reference series are chunked one row per chunk (filtered
   with the default compression); the `[case, replicate]`, `[case, revolution]` and
-  `[case, order]` arrays and the 1-D variables are contiguous.
+  `[case, order]` arrays and the 1-D numeric variables are chunked in whole rows of up
+  to 65 536 values, uncompressed;
+- every numeric variable carries the Fletcher-32 checksum filter; string variables
+  (variable-length, which take no filter) carry `studyrun_crc32` instead.
 
 Environment: STUDYRUN_BIN (the binary runs the study written here); else skip.
 """
 
+import numpy as np
 import pytest
 
 from study_run import opened_run
@@ -48,12 +52,26 @@ def test_the_late_coordinates_sit_before_their_first_variable(f):
         assert names.index(coordinate) > names.index("wall_time")
 
 
-def test_series_and_spectra_are_chunked_by_row_and_the_other_2d_arrays_contiguous(f):
+WHOLE_CHUNK_ELEMENTS = 65536
+
+
+def whole_rows(shape):
+    """The chunk shape docs/result-file.md gives a variable written whole."""
+    cols = int(np.prod(shape[1:], dtype=np.int64)) if len(shape) > 1 else 1
+    rows = min(max(WHOLE_CHUNK_ELEMENTS // max(cols, 1), 1), max(shape[0], 1))
+    return (rows, *shape[1:])
+
+
+def test_series_and_spectra_are_chunked_by_row_and_the_others_in_whole_rows(f):
     kinds = {"time": 0, "frequency": 0, "replicate": 0, "revolution": 0, "order": 0}
     for name in f:
         var = f[name]
+        if var.dtype.kind == "O":
+            assert var.chunks is None and "studyrun_crc32" in var.attrs, name
+            continue
+        assert var.fletcher32, name
         if var.ndim == 1:
-            assert var.chunks is None, name
+            assert var.chunks == whole_rows(var.shape) and var.compression is None, (name, var.chunks)
             continue
         first, second = dims(var)
         kinds[second] += 1
@@ -63,6 +81,6 @@ def test_series_and_spectra_are_chunked_by_row_and_the_other_2d_arrays_contiguou
             assert var.compression == "gzip" and var.shuffle, name
         else:
             assert first == "case" and second in ("replicate", "revolution", "order"), name
-            assert var.chunks is None and var.compression is None, (name, var.chunks)
+            assert var.chunks == whole_rows(var.shape) and var.compression is None, (name, var.chunks)
     assert all(count > 0 for count in kinds.values()), kinds
     assert any(name.endswith("_envelope_spectrum") for name in f)

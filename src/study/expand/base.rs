@@ -60,23 +60,8 @@ pub(super) fn finish_case(
     prov: impl FnOnce() -> Provenance,
     id: u64,
 ) -> Result<Case, StudyError> {
-    if !effects.clearance {
-        params.bearing.clearance = 0.0;
-    }
-    if !effects.waviness {
-        params.bearing.inner_waviness = RaceWaviness::default();
-        params.bearing.outer_waviness = RaceWaviness::default();
-    }
-    if !effects.damping {
-        params.bearing.damping = 0.0;
-        params.bearing.damping_model = DampingModel::CompressionOnly;
-    }
-    if !effects.defects {
-        params.bearing.defects.clear();
-    }
-    params.gravity = effects.gravity;
-    let checked = params.validate().and_then(|()| balls_fit(&params));
-    checked.map_err(|e| {
+    without_effects_off(&mut params, effects);
+    check_case(&params).map_err(|e| {
         let prov = prov();
         let source = prov.iter().rev().find(|(name, _, _)| {
             lookup(name).is_some_and(|p| p.field == e.field)
@@ -98,6 +83,32 @@ pub(super) fn finish_case(
         params,
         reference: 0,
     })
+}
+
+/// `params` with what the effects turned off taken out: no clearance, waviness,
+/// damping or defects; gravity as the effects say.
+pub(super) fn without_effects_off(params: &mut CaseParams, effects: &Effects) {
+    if !effects.clearance {
+        params.bearing.clearance = 0.0;
+    }
+    if !effects.waviness {
+        params.bearing.inner_waviness = RaceWaviness::default();
+        params.bearing.outer_waviness = RaceWaviness::default();
+    }
+    if !effects.damping {
+        params.bearing.damping = 0.0;
+        params.bearing.damping_model = DampingModel::CompressionOnly;
+    }
+    if !effects.defects {
+        params.bearing.defects.clear();
+    }
+    params.gravity = effects.gravity;
+}
+
+/// A case's parameters valid each on its own ([`CaseParams::validate`]) and together
+/// (the balls fit the races).
+pub(super) fn check_case(params: &CaseParams) -> Result<(), crate::error::ParamError> {
+    params.validate().and_then(|()| balls_fit(params))
 }
 
 /// A bearing's balls fit between its races ([`max_balls`]).

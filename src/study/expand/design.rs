@@ -3,6 +3,7 @@
 //! (like a `zip:` group) as the fastest group, so the whole design repeats at
 //! every grid point and explicit case.
 
+use super::base::{check_case, without_effects_off};
 use super::{at, Ctx, Effects, ResolvedAxis, Target};
 use crate::mechanism::CaseParams;
 use crate::study::config::{DesignParameter, DesignSection, GridFile, Scalar, S};
@@ -169,10 +170,9 @@ pub(super) fn resolve(
                 "this parameter is also a grid axis or set by an explicit case; give it in one place",
             ));
         }
-        columns.push((
-            column(ctx, base, effects, name, &spec.value, &field, place)?,
-            place,
-        ));
+        let column = column(ctx, base, effects, name, &spec.value, &field, place)?;
+        check_extremes(ctx, base, effects, &column, &field, place)?;
+        columns.push((column, place));
         fields.push(field);
     }
     let dims = columns.len();
@@ -211,6 +211,27 @@ enum Column {
 }
 
 impl Column {
+    /// The values at the ends of what the column draws, each with the key of the grid
+    /// file that sets it: `min` and `max` of a range (a count's own max), the extreme
+    /// draws of a normal (`u` = 2⁻³³ and 1 − 2⁻³³, ±6.3 sd), every choice.
+    fn extremes(&self) -> Vec<(String, Target)> {
+        match self {
+            Column::Scalar(_, Distribution::Normal { .. }) => vec![
+                ("mean - 6.3 sd".into(), self.value(0.0)),
+                ("mean + 6.3 sd".into(), self.value(1.0)),
+            ],
+            Column::Scalar(..) => vec![
+                ("min".into(), self.value(0.0)),
+                ("max".into(), self.value(1.0)),
+            ],
+            Column::Choices(options) => options
+                .iter()
+                .enumerate()
+                .map(|(k, &t)| (format!("choices[{k}]"), t))
+                .collect(),
+        }
+    }
+
     fn value(&self, u: f64) -> Target {
         match self {
             Column::Scalar(p, dist) if p.integer => {
@@ -228,6 +249,35 @@ impl Column {
             }
         }
     }
+}
+
+/// Refuses a column whose extreme value (see [`Column::extremes`]) makes the base case
+/// invalid: any row may draw it, so the design is refused whether or not one did.
+fn check_extremes(
+    ctx: &Ctx<'_>,
+    base: &CaseParams,
+    effects: &Effects,
+    column: &Column,
+    field: &str,
+    place: (u64, u64),
+) -> Result<(), StudyError> {
+    for (which, target) in column.extremes() {
+        let mut params = base.clone();
+        target.set(&mut params);
+        without_effects_off(&mut params, effects);
+        check_case(&params).map_err(|e| {
+            ctx.err(
+                Some(place),
+                &format!("{field}.{which}"),
+                format!(
+                    "{} (at the design's {which}, the other parameters at their base values: \
+                     every row may draw it)",
+                    e.refusal()
+                ),
+            )
+        })?;
+    }
+    Ok(())
 }
 
 /// One parameter's column, checked: the parameter exists and its effect is on, its
