@@ -201,6 +201,7 @@ fn replicate_settings_are_checked() {
     assert_eq!(e, r.eccentricity(5, 1));
     assert_ne!(e, r.eccentricity(6, 1));
     assert_ne!(e, r.eccentricity(5, 2));
+    assert!(study("replicates: {count: 2, perturbation: \"39 nm\"}\n").is_ok());
     let off =
         study("replicates: {count: 2, perturbation: \"1 nm\"}\nchaos_check: false\n").unwrap();
     assert!(!off.chaos_check);
@@ -228,6 +229,29 @@ fn replicate_settings_are_checked() {
             &["replicates.perturbation"],
         ),
         ("replicates: {count: 2}\n", &["perturbation"]),
+        // At most 1 % of the smallest length of any case: here the 4 µm waviness
+        // (40 nm), below the 20 µm radial play (200 nm).
+        (
+            "replicates: {count: 2, perturbation: \"1 mm\"}\n",
+            &[
+                "replicates.perturbation",
+                "1 mm",
+                "is not allowed",
+                "waviness amplitude",
+            ],
+        ),
+        (
+            "replicates: {count: 2, perturbation: \"100 um\"}\n",
+            &[
+                "replicates.perturbation",
+                "at most 0.04 µm in case",
+                "(4 µm)",
+            ],
+        ),
+        (
+            "replicates: {count: 2, perturbation: \"41 nm\"}\n",
+            &["replicates.perturbation", "41 nm"],
+        ),
     ] {
         let err = study(text).expect_err(text);
         for needle in needles {

@@ -100,7 +100,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         .transpose()?;
     let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
     let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
-    let (replicates, chaos_check) = replicates::resolve(&ctx, &file)?;
+    let (replicates, chaos_check) = replicates::resolve(&ctx, &file, &cases)?;
     let revolutions = most_revolutions(&cases, transient, sampling.duration);
     check_samples_per_revolution(&ctx, &file, revolutions, &sampling)?;
     known.references = references.len() as u64;

@@ -1,18 +1,103 @@
 //! The `replicates:` section and `chaos_check`, checked.
 
 use super::{at, Ctx};
+use crate::error::number;
+use crate::mechanism::{CaseParams, Location};
 use crate::study::config::GridFile;
 use crate::study::units::Dimension;
-use crate::study::{Replicates, StudyError};
+use crate::study::{Case, Replicates, StudyError};
 
 /// Most runs per case `replicates.count` allows.
 pub(super) const MAX_REPLICATES: u64 = 1000;
 
+/// The largest perturbation as a fraction of a case's smallest length scale
+/// ([`perturbation_bound`]).
+const PERTURBATION_FRACTION: f64 = 0.01;
+
+/// The length scale of a case with a bearing but no clearance, waviness or defect
+/// (m): the order of the balls' Hertz deflection under the mechanism's loads.
+const CONTACT_SCALE: f64 = 1e-6;
+
+/// The largest start perturbation replicates of `case` allow (m), with the length it
+/// is a fraction of, described: [`PERTURBATION_FRACTION`] of the smallest of the radial
+/// play |P_d|/2, every waviness amplitude and every defect depth (those above 0), or of
+/// [`CONTACT_SCALE`] with none of them; `None` for the ideal mechanism (no bearing to
+/// start off centre in). A perturbed start then lies in replicate 0's contact state
+/// and changes every contact force by about 1.5 % at most (docs/model.md §9.5).
+fn perturbation_bound(case: &CaseParams) -> Option<(f64, String)> {
+    if case.location == Location::Ideal {
+        return None;
+    }
+    let b = &case.bearing;
+    let mut scales = vec![(
+        0.5 * b.clearance.abs(),
+        "the radial play |P_d|/2".to_string(),
+    )];
+    for (race, w) in [("inner", &b.inner_waviness), ("outer", &b.outer_waviness)] {
+        for h in &w.harmonics {
+            scales.push((h.amplitude, format!("the {race} race's waviness amplitude")));
+        }
+    }
+    for d in &b.defects {
+        scales.push((d.depth, "the defect depth".to_string()));
+    }
+    let smallest = scales
+        .into_iter()
+        .filter(|(x, _)| *x > 0.0)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap_or((
+            CONTACT_SCALE,
+            "a Hertz deflection, with no clearance, waviness or defect".into(),
+        ));
+    Some((
+        PERTURBATION_FRACTION * smallest.0,
+        format!("{} ({})", smallest.1, micrometres(smallest.0)),
+    ))
+}
+
+/// A length in µm, for messages.
+fn micrometres(x: f64) -> String {
+    format!("{} µm", number(1e6 * x))
+}
+
+/// Refuses a perturbation above the bound of any case ([`perturbation_bound`]), naming
+/// the case where the bound is smallest.
+fn check_perturbation(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    perturbation: f64,
+    cases: &[Case],
+) -> Result<(), StudyError> {
+    let tightest = cases
+        .iter()
+        .filter_map(|c| perturbation_bound(&c.params).map(|b| (c.id, b)))
+        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
+    let Some((id, (bound, scale))) = tightest.filter(|(_, (bound, _))| perturbation > *bound)
+    else {
+        return Ok(());
+    };
+    let r = &file.replicates.as_ref().expect("replicates given").value;
+    Err(ctx.err(
+        Some(at(&r.perturbation.referenced)),
+        "replicates.perturbation",
+        format!(
+            "{} ({}) is not allowed: at most {} in case {id}, 1 % of {scale} (a perturbed \
+             start must stay a small disturbance of the centred one: in its contact state, \
+             every contact force changed by about 1.5 % at most)",
+            r.perturbation.value,
+            micrometres(perturbation),
+            micrometres(bound)
+        ),
+    ))
+}
+
 /// The study's replicates (none without the section) and whether its chaos check
 /// runs: `chaos_check` as given, else on with two or more replicates; on needs two.
+/// The perturbation is checked against every case's bound.
 pub(super) fn resolve(
     ctx: &Ctx<'_>,
     file: &GridFile,
+    cases: &[Case],
 ) -> Result<(Option<Replicates>, bool), StudyError> {
     let replicates = match &file.replicates {
         None => None,
@@ -49,6 +134,7 @@ pub(super) fn resolve(
                     ),
                 ));
             }
+            check_perturbation(ctx, file, perturbation, cases)?;
             Some(Replicates {
                 count: count as usize,
                 perturbation,
