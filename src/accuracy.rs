@@ -595,6 +595,7 @@ pub fn write_file(
                 metrics: &values,
                 status,
                 message,
+                replicate_messages: &[],
             },
         )?;
     }

@@ -194,6 +194,7 @@ fn write_synthetic(path: &Path, storage: Storage) -> (usize, f64) {
                 metrics: &[],
                 status: Status::Failed,
                 message: "step size underflow at t = 0.123 s",
+                replicate_messages: &[],
             }
         } else {
             raw += 8 * (series.len() * N_TIME + spectra.len() * plan.bins());
@@ -203,6 +204,7 @@ fn write_synthetic(path: &Path, storage: Storage) -> (usize, f64) {
                 metrics: &case.metrics,
                 status: Status::Ok,
                 message: "",
+                replicate_messages: &[],
             }
         };
         let start = Instant::now();
@@ -398,6 +400,7 @@ fn resume_writes_into_an_existing_file() {
         metrics: &case.metrics,
         status: Status::Ok,
         message: "",
+        replicate_messages: &[],
     };
     writer.write_case(UNWRITTEN, &record).unwrap();
     writer.finish().unwrap();
@@ -455,6 +458,7 @@ fn chunks_lie_after_the_file_length_before_their_write() {
             metrics: &case.metrics,
             status: Status::Ok,
             message: "",
+            replicate_messages: &[],
         };
         let before = writer.file_len();
         assert_eq!(writer.write_encoded(row, &record).unwrap(), before);
@@ -495,6 +499,7 @@ fn errors_name_the_file_and_the_variable() {
         metrics: &[],
         status: Status::Ok,
         message: "",
+        replicate_messages: &[],
     };
     let err = writer.write_case(0, &record).unwrap_err().to_string();
     assert!(
@@ -521,6 +526,7 @@ fn errors_name_the_file_and_the_variable() {
         series: &[],
         status: Status::Failed,
         message: "bad\0byte",
+        replicate_messages: &[],
         ..record
     };
     writer.write_case(1, &failed).unwrap();
@@ -666,6 +672,7 @@ fn write_encoded_file(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
                     metrics: &[row as f64],
                     status: Status::Ok,
                     message: "",
+                    replicate_messages: &[],
                 },
             )
             .unwrap();
@@ -859,6 +866,7 @@ fn write_throughput() {
                 metrics: &[1.0],
                 status: Status::Ok,
                 message: "",
+                replicate_messages: &[],
             };
             writer.write_case(row, &record).unwrap();
         }
@@ -911,6 +919,7 @@ fn minimal_layout_without_spectra() {
         metrics: &[],
         status: Status::Ok,
         message: "",
+        replicate_messages: &[],
     };
     writer.write_case(0, &record).unwrap();
     writer.finish().unwrap();

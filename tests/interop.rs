@@ -218,6 +218,7 @@ fn reversed_copy(src: &Path, dst: &Path) {
                 metrics: &c.metrics,
                 status: c.status,
                 message: &c.message,
+                replicate_messages: &c.replicate_messages,
             },
         )
         .unwrap();

@@ -260,3 +260,89 @@ fn replicate_settings_are_checked() {
         assert!(err.contains("grid.yaml:"), "{err}");
     }
 }
+
+/// A perturbed replicate that fails says why in the file and makes the run exit 3:
+/// a step budget that replicate 0 fits in and a perturbed replicate, which needs more
+/// steps, exhausts.
+#[test]
+fn a_failed_replicate_says_why_and_the_run_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let one = "name: one\nduration: 0.05\nsample_rate: 10000\ntransient: \"0.01 s\"\n\
+               bearing: {waviness: {number: 35, amplitude: \"4 um\"}}\n\
+               grid: {location: [crank_ground], rpm: [600]}\n";
+    let steps = |path: &Path| -> Vec<u64> {
+        let r = StudyReader::open(path).unwrap();
+        let c = r.read_case(0).unwrap();
+        let l = r.layout();
+        let at = |name: &str| {
+            let m = l
+                .replicate_metrics
+                .iter()
+                .position(|s| s.name == name)
+                .unwrap();
+            l.metrics.len() + m * l.replicates.len()
+        };
+        let (s, j) = (at("steps_replicates"), at("rejected_steps_replicates"));
+        (0..l.replicates.len())
+            .map(|k| (c.metrics[s + k] + c.metrics[j + k]) as u64)
+            .collect()
+    };
+    // A seed whose perturbed replicates need more steps than replicate 0.
+    let (seed, budget) = (0..16)
+        .find_map(|seed| {
+            let text =
+                format!("{one}replicates: {{count: 4, perturbation: \"1 nm\", seed: {seed}}}\n");
+            write(d, "probe.yaml", &text);
+            ok(d, &["probe.yaml", "-o", "probe.h5", "-q", "--force"]);
+            let t = steps(&d.join("probe.h5"));
+            t[1..].iter().any(|&x| x > t[0]).then_some((seed, t[0]))
+        })
+        .expect("a seed with a perturbed replicate taking more steps than replicate 0");
+    let text = format!(
+        "{one}replicates: {{count: 4, perturbation: \"1 nm\", seed: {seed}}}\nsolver: {{max_steps: {budget}}}\n"
+    );
+    write(d, "budget.yaml", &text);
+    let out = crate::cli::studyrun(d, &["budget.yaml", "-o", "budget.h5"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("perturbed replicates failed"), "{err}");
+    let r = StudyReader::open(d.join("budget.h5")).unwrap();
+    let case = r.read_case(0).unwrap();
+    assert_eq!(case.status, studyrun::output::Status::Ok);
+    let failed = case
+        .replicate_messages
+        .iter()
+        .filter(|m| !m.is_empty())
+        .count();
+    assert!(
+        failed >= 1 && case.replicate_messages[0].is_empty(),
+        "{:?}",
+        case.replicate_messages
+    );
+    assert_eq!(r.failed_replicates().unwrap(), failed);
+    for m in case.replicate_messages.iter().filter(|m| !m.is_empty()) {
+        assert!(m.contains("step"), "{m}");
+    }
+    // The failed replicates' metrics are NaN, the others' numbers.
+    let l = r.layout();
+    let first = l.metrics.len();
+    for (k, m) in case.replicate_messages.iter().enumerate() {
+        assert_eq!(
+            case.metrics[first + k].is_nan(),
+            !m.is_empty(),
+            "replicate {k}"
+        );
+    }
+    drop(r);
+    let summary = studyrun::output::inspect(&d.join("budget.h5")).unwrap();
+    assert!(
+        summary.contains(&format!("; {failed} perturbed replicates failed")),
+        "{summary}"
+    );
+    // A resume of the complete file and --allow-failed agree.
+    let again = crate::cli::studyrun(d, &["budget.yaml", "-o", "budget.h5", "--resume"]);
+    assert_eq!(again.status.code(), Some(3));
+    let allowed = crate::cli::studyrun(d, &["budget.yaml", "-o", "b2.h5", "--allow-failed", "-q"]);
+    assert_eq!(allowed.status.code(), Some(0));
+}

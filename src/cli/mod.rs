@@ -93,7 +93,7 @@ Examples:
 
 Exit codes: 0 all cases ok (or some failed, with --allow-failed); 1 error (I/O, HDF5,
 output in use by another process); 2 invalid input (grid file, options, an input file
-missing or not HDF5); 3 finished, some cases failed.
+missing or not HDF5); 3 finished, some cases or replicates failed.
 
 Environment: STUDYRUN_ISA=baseline runs the hot paths on SSE2 instead of AVX (the
 results are the same bits; for speed comparisons); unset, the widest the CPU has.";
@@ -228,8 +228,8 @@ struct RunArgs {
     /// is larger is refused before anything runs [default: half the memory].
     #[arg(long, value_name = "SIZE", value_parser = parse_size)]
     memory_limit: Option<u64>,
-    /// Exit 0 (not 3) when the study finished and some cases failed: they are
-    /// recorded in the file. For job scripts whose next step depends on success.
+    /// Exit 0 (not 3) when the study finished and some cases or replicates failed:
+    /// they are recorded in the file. For job scripts whose next step depends on success.
     #[arg(long)]
     allow_failed: bool,
     /// No progress output.

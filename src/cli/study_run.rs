@@ -1,7 +1,7 @@
 //! `studyrun GRID` and `studyrun validate GRID`: run a study, or check its grid file.
 
 use super::*;
-use studyrun::run::{self, RunOptions};
+use studyrun::run::{self, RunOptions, RunSummary};
 
 /// `studyrun validate GRID [--json]`: the grid file checked under `limits`, with its
 /// case count and memory estimate. With `json`, a refused grid file is a JSON object
@@ -106,11 +106,7 @@ pub(super) fn run_command(args: RunArgs) -> Result<u8> {
             summary.ok,
             summary.failed
         );
-        return Ok(if summary.failed > 0 && !args.allow_failed {
-            EXIT_CASES_FAILED
-        } else {
-            EXIT_OK
-        });
+        return Ok(exit_code(&summary, args.allow_failed));
     }
     if args.timings {
         say!("{}", summary.stats);
@@ -137,9 +133,22 @@ pub(super) fn run_command(args: RunArgs) -> Result<u8> {
             summary.rerun
         );
     }
-    Ok(if summary.failed > 0 && !args.allow_failed {
+    if summary.failed_replicates > 0 {
+        say!(
+            "studyrun: {} perturbed replicates failed (their metrics are NaN; why is in \
+             replicate_error_message)",
+            summary.failed_replicates
+        );
+    }
+    Ok(exit_code(&summary, args.allow_failed))
+}
+
+/// [`EXIT_CASES_FAILED`] when a case or a replicate failed (unless `allow_failed`),
+/// else [`EXIT_OK`].
+fn exit_code(summary: &RunSummary, allow_failed: bool) -> u8 {
+    if (summary.failed > 0 || summary.failed_replicates > 0) && !allow_failed {
         EXIT_CASES_FAILED
     } else {
         EXIT_OK
-    })
+    }
 }

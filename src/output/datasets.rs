@@ -5,7 +5,9 @@ use std::path::Path;
 use hdf5::{Dataset, File};
 
 use super::error::{AtVariable, StudyFileError};
-use super::layout::{Layout, VarSpec, ERROR_MESSAGE, STATUS};
+use super::layout::{
+    Layout, VarSpec, ERROR_MESSAGE, REPLICATE_ERROR_MESSAGE, REPLICATE_STATUS, STATUS,
+};
 
 /// Handles to every dataset written or read one row at a time, in [`Layout`] order.
 pub(super) struct RowDatasets {
@@ -17,6 +19,8 @@ pub(super) struct RowDatasets {
     pub(super) order_spectra: Vec<Dataset>,
     pub(super) status: Dataset,
     pub(super) error_message: Dataset,
+    /// `replicate_status` and `replicate_error_message`, in a file with replicates.
+    pub(super) replicates: Option<(Dataset, Dataset)>,
     pub(super) reference_series: Vec<Dataset>,
 }
 
@@ -36,6 +40,11 @@ impl RowDatasets {
             order_spectra: all(&layout.order_spectra)?,
             status: one(STATUS)?,
             error_message: one(ERROR_MESSAGE)?,
+            replicates: if layout.replicates.is_empty() {
+                None
+            } else {
+                Some((one(REPLICATE_STATUS)?, one(REPLICATE_ERROR_MESSAGE)?))
+            },
             reference_series: all(&layout.reference_series)?,
         })
     }

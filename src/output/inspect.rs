@@ -144,6 +144,8 @@ pub struct Replicates {
     pub seed: i64,
     /// Whether `predictability_horizon` and `chaotic` are stored per case.
     pub chaos_check: bool,
+    /// Perturbed replicates of ok cases that failed (`replicate_status` failed).
+    pub failed: usize,
 }
 
 /// The order spectra of a [`Summary`].
@@ -186,6 +188,7 @@ impl Summary {
         let statuses = r.statuses()?;
         let count = |s: Status| statuses.iter().filter(|&&x| x == s).count();
         let grid_axes = a.list("grid_axes");
+        let failed_replicates = r.failed_replicates()?;
         let mut failed = Vec::new();
         for row in (0..statuses.len()).filter(|&k| statuses[k] == Status::Failed) {
             failed.push(Failed {
@@ -231,6 +234,7 @@ impl Summary {
                 perturbation_m: a.number("replicate_perturbation"),
                 seed: a.integer("replicate_seed").unwrap_or(0),
                 chaos_check: l.metrics.iter().any(|m| m.name == "chaotic"),
+                failed: failed_replicates,
             }),
             orders: (!l.orders.is_empty()).then(|| Orders {
                 variables: l.order_spectra.iter().map(|s| s.name.clone()).collect(),
@@ -337,7 +341,7 @@ impl Summary {
         if let Some(r) = &self.replicates {
             writeln!(
                 out,
-                "replicates: {} per case, perturbation {} m, seed {}{}",
+                "replicates: {} per case, perturbation {} m, seed {}{}{}",
                 r.count,
                 r.perturbation_m,
                 r.seed,
@@ -345,6 +349,14 @@ impl Summary {
                     "; predictability_horizon and chaotic per case"
                 } else {
                     ""
+                },
+                if r.failed > 0 {
+                    format!(
+                        "; {} perturbed replicates failed (replicate_error_message)",
+                        r.failed
+                    )
+                } else {
+                    String::new()
                 }
             )?;
         }

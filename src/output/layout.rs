@@ -54,6 +54,13 @@ pub const ORDER: &str = "order";
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
 pub const ERROR_MESSAGE: &str = "error_message";
+/// Built-in variable `[case, replicate]` i8, in a file with replicates: the [`Status`]
+/// code of each replicate (replicate 0's is the case's; the perturbed replicates of a
+/// failed case were not run and stay pending).
+pub const REPLICATE_STATUS: &str = "replicate_status";
+/// Built-in variable `[case, replicate]` string, in a file with replicates: why a
+/// replicate failed (empty otherwise).
+pub const REPLICATE_ERROR_MESSAGE: &str = "replicate_error_message";
 /// Built-in variable `[case]` int32: the `reference` row each case is compared with.
 pub const REFERENCE_INDEX: &str = "reference_index";
 
@@ -65,7 +72,7 @@ pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
 pub(super) const FORMAT_VERSION: i64 = 1;
 
 /// The names no caller variable may take.
-const RESERVED: [&str; 10] = [
+const RESERVED: [&str; 12] = [
     CASE,
     TIME,
     FREQUENCY,
@@ -75,6 +82,8 @@ const RESERVED: [&str; 10] = [
     ORDER,
     STATUS,
     ERROR_MESSAGE,
+    REPLICATE_STATUS,
+    REPLICATE_ERROR_MESSAGE,
     REFERENCE_INDEX,
 ];
 

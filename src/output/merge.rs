@@ -428,6 +428,7 @@ fn write_merged(
                     metrics: &metrics,
                     status: c.status,
                     message: &c.message,
+                    replicate_messages: &c.replicate_messages,
                 },
             )
             .map_err(OutputError::file(&partial))?;

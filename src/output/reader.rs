@@ -11,8 +11,8 @@ use super::datasets::{check_row, RowDatasets};
 use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
-    AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, ERROR_MESSAGE,
-    FORMAT_ATTR, FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
+    AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, FORMAT_ATTR,
+    FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REPLICATE_STATUS,
     REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
 };
 use super::text::{self, Strings};
@@ -35,6 +35,10 @@ pub struct CaseData {
     pub status: Status,
     /// Why it failed (empty otherwise).
     pub message: String,
+    /// In a file with replicates, for an ok case: why each replicate failed, one per
+    /// replicate, empty where it did not (as [`Record::replicate_messages`](super::Record::replicate_messages)).
+    /// Empty otherwise.
+    pub replicate_messages: Vec<String>,
 }
 
 /// Reads a study file written by [`StudyWriter`](super::StudyWriter), also after
@@ -50,6 +54,9 @@ pub struct StudyReader {
     rows: RowDatasets,
     /// `error_message`, read whole at open (it is small).
     messages: Vec<String>,
+    /// `replicate_error_message`, row-major, read whole at open (empty without
+    /// replicates).
+    replicate_messages: Vec<String>,
     /// Kept open for the datasets' lifetime.
     file: File,
 }
@@ -163,11 +170,16 @@ impl StudyReader {
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
         let messages = read_messages(&rows.error_message, layout.n_cases(), &path)?;
+        let replicate_messages = match &rows.replicates {
+            Some((_, ds)) => read_messages(ds, layout.n_cases() * layout.replicates.len(), &path)?,
+            None => Vec::new(),
+        };
         Ok(Self {
             path,
             layout,
             rows,
             messages,
+            replicate_messages,
             file,
         })
     }
@@ -218,12 +230,18 @@ impl StudyReader {
         metrics.extend(orders.into_iter().flatten());
         let message = self.messages[row].clone();
         let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
+        let status = self.status(code)?;
+        let replicate_messages = match status {
+            Status::Ok => self.replicate_messages(row)?.to_vec(),
+            _ => Vec::new(),
+        };
         Ok(CaseData {
             series,
             spectra,
             metrics,
-            status: self.status(code)?,
+            status,
             message,
+            replicate_messages,
         })
     }
 
@@ -242,6 +260,34 @@ impl StudyReader {
     pub fn message(&self, row: usize) -> Result<&str, StudyFileError> {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
         Ok(&self.messages[row])
+    }
+
+    /// Why each replicate of case row `row` failed, one per replicate (empty where it
+    /// did not; none in a file without replicates). A failed case's replicate 0 has
+    /// the case's message here, its perturbed replicates (not run) none.
+    pub fn replicate_messages(&self, row: usize) -> Result<&[String], StudyFileError> {
+        check_row(&self.path, CASE, row, self.layout.n_cases())?;
+        let width = self.layout.replicates.len();
+        Ok(self
+            .replicate_messages
+            .get(row * width..(row + 1) * width)
+            .unwrap_or_default())
+    }
+
+    /// The number of replicates of ok cases that failed (`replicate_status` failed).
+    pub fn failed_replicates(&self) -> Result<usize, StudyFileError> {
+        let Some((ds, _)) = &self.rows.replicates else {
+            return Ok(0);
+        };
+        let codes = ds.read_raw::<i8>().at(&self.path, REPLICATE_STATUS)?;
+        let width = self.layout.replicates.len();
+        let statuses = self.rows.status.read_raw::<i8>().at(&self.path, STATUS)?;
+        Ok(codes
+            .chunks(width.max(1))
+            .zip(statuses)
+            .filter(|(_, case)| *case == Status::Ok.code())
+            .map(|(row, _)| row.iter().filter(|&&c| c == Status::Failed.code()).count())
+            .sum())
     }
 
     /// The status of every case, in row order (to find what is left to run).
@@ -294,19 +340,21 @@ fn damaged(path: &Path, reason: String) -> StudyFileError {
     }
 }
 
-/// Reads the `error_message` column (`n` strings, any string type).
+/// Reads a message variable, `error_message` or `replicate_error_message` (`n`
+/// strings, any string type, row-major), checked against its digest.
 pub(super) fn read_messages(
     ds: &Dataset,
     n: usize,
     path: &Path,
 ) -> Result<Vec<String>, StudyFileError> {
-    let messages = text::read_dataset_text(ds).at(path, ERROR_MESSAGE)?;
-    text::check_digest(ds, text::DIGEST_ATTR, &messages, "strings").at(path, ERROR_MESSAGE)?;
+    let name = ds.name().trim_start_matches('/').to_owned();
+    let messages = text::read_dataset_text(ds).at(path, &name)?;
+    text::check_digest(ds, text::DIGEST_ATTR, &messages, "strings").at(path, &name)?;
     if messages.len() != n {
         return Err(StudyFileError::Format {
             path: path.to_owned(),
-            variable: ERROR_MESSAGE.to_owned(),
-            reason: format!("{} values for {n} cases", messages.len()),
+            variable: name,
+            reason: format!("{} values where {n} belong", messages.len()),
         });
     }
     Ok(messages)

@@ -32,6 +32,9 @@ pub(crate) struct CaseResult {
     /// case's last whole revolution), then per order spectrum its bins: the file's
     /// [`Record::metrics`](crate::output::Record::metrics).
     pub metrics: Vec<f64>,
+    /// With replicates, for a case that ran (ok), why each replicate failed: one per
+    /// replicate, replicate 0 first, empty where it did not fail; otherwise empty.
+    pub replicate_messages: Vec<String>,
     /// What computing the case cost (not stored in the file or the journal).
     pub cost: CaseCost,
 }
@@ -54,7 +57,8 @@ pub(crate) struct CaseCost {
 /// replicates one after the other and adds their metrics, statistics and
 /// predictability horizon (docs/model.md §9.5). Never fails: a failure of the case
 /// (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
-/// perturbed replicate only leaves its metrics NaN.
+/// perturbed replicate leaves its metrics NaN and its message in
+/// [`CaseResult::replicate_messages`].
 pub(crate) fn run_case(
     study: &Study,
     row: usize,
@@ -89,6 +93,7 @@ pub(crate) fn run_case(
             series: Vec::new(),
             spectra: Vec::new(),
             metrics,
+            replicate_messages: Vec::new(),
             cost,
         }
     };
@@ -130,7 +135,9 @@ pub(crate) fn run_case(
         .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
     let series = stored_series(study, out.channels, sensor_series);
     metrics.push(start.elapsed().as_secs_f64());
-    if let Some(r) = replicates {
+    let mut replicate_messages = Vec::new();
+    if let Some(mut r) = replicates {
+        replicate_messages = std::mem::take(&mut r.messages);
         push_replicates(study, r, &mut metrics);
     }
     metrics.extend(per_revolution.into_iter().flatten());
@@ -143,6 +150,7 @@ pub(crate) fn run_case(
         series,
         spectra,
         metrics,
+        replicate_messages,
         cost,
     }
 }
@@ -218,6 +226,9 @@ struct ReplicateResults {
     /// replicate 0 in the analysed window (s); the duration if none parts, NaN if
     /// none ran.
     horizon: f64,
+    /// Why each replicate failed, replicate 0 (which did not) first; empty where it
+    /// did not.
+    messages: Vec<String>,
 }
 
 /// Runs replicates `1..count` of `case` (replicate 0 is `base`, whose metrics but
@@ -246,6 +257,7 @@ fn run_replicates(
     // transient, in the analysed window (docs/model.md §9.5).
     let window = study.analysis_window();
     let mut horizon = f64::INFINITY;
+    let mut messages = vec![String::new(); count];
     for k in 1..count {
         let cpu_start = thread_cpu();
         let e = replicates.eccentricity(case.id, k);
@@ -254,11 +266,15 @@ fn run_replicates(
             .and_then(|out| check_eccentricity(&case.params, &out).map(|()| out));
         let cpu_simulated = thread_cpu();
         cost.simulate += cpu_simulated - cpu_start;
-        let Ok(out) = run else {
-            continue;
+        let out = match run {
+            Ok(out) => out,
+            Err(e) => {
+                messages[k] = e;
+                continue;
+            }
         };
         // Metrics only: the file keeps replicate 0's spectra.
-        if let Ok(a) = analyse(
+        match analyse(
             &case.params,
             &out,
             &[],
@@ -269,9 +285,12 @@ fn run_replicates(
             None,
             None,
         ) {
-            for (m, &j) in chosen.iter().enumerate() {
-                values[m * count + k] = a.metrics[j];
+            Ok(a) => {
+                for (m, &j) in chosen.iter().enumerate() {
+                    values[m * count + k] = a.metrics[j];
+                }
             }
+            Err(e) => messages[k] = e.to_string(),
         }
         let acceleration = out.channel("slider_acceleration").expect("channel exists");
         horizon = horizon.min(predictability_horizon(
@@ -291,6 +310,7 @@ fn run_replicates(
         } else {
             f64::NAN
         },
+        messages,
     }
 }
 

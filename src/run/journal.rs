@@ -34,7 +34,8 @@
 //! bytes, number of series u32, number of spectra u32, partial file length before the
 //! chunks u64, per chunk (first 8 bytes, last 8 bytes, length u64, CRC-32 u32), number
 //! of metrics
-//! u32, metrics f64 each, CRC-32 of the record u32]`, little-endian. Reading stops at the first truncated or corrupt record (a kill
+//! u32, metrics f64 each, number of replicate messages u32, per message its length u32
+//! and bytes, CRC-32 of the record u32]`, little-endian. Reading stops at the first truncated or corrupt record (a kill
 //! during a write).
 
 use std::fs::File;
@@ -49,7 +50,7 @@ use crate::output::{
     StudyWriter,
 };
 
-const MAGIC: &[u8; 8] = b"SRJOURN4";
+const MAGIC: &[u8; 8] = b"SRJOURN5";
 /// What the magic of every studyrun journal format starts with.
 const MAGIC_STEM: &[u8; 7] = b"SRJOURN";
 const RECORD: &[u8; 4] = b"CASE";
@@ -122,6 +123,8 @@ pub struct JournalRecord {
     row: usize,
     status: Status,
     message: String,
+    /// Why each replicate failed (see [`CaseResult::replicate_messages`]).
+    replicate_messages: Vec<String>,
     n_series: usize,
     /// The stored chunks, one after the other (series, then spectra).
     bytes: Vec<u8>,
@@ -154,6 +157,7 @@ impl JournalRecord {
             row: result.row,
             status: result.status,
             message: result.message.clone(),
+            replicate_messages: result.replicate_messages.clone(),
             n_series: result.series.len(),
             bytes,
             chunks,
@@ -170,6 +174,14 @@ impl JournalRecord {
     /// Ok or failed.
     pub fn status(&self) -> Status {
         self.status
+    }
+
+    /// How many of its replicates failed.
+    pub fn failed_replicates(&self) -> usize {
+        self.replicate_messages
+            .iter()
+            .filter(|m| !m.is_empty())
+            .count()
     }
 
     /// Size of the chunks (series and spectra as stored) in bytes.
@@ -190,6 +202,7 @@ impl JournalRecord {
                 metrics: &self.metrics,
                 status: self.status,
                 message: &self.message,
+                replicate_messages: &self.replicate_messages,
             },
         )
     }
@@ -245,6 +258,11 @@ impl JournalWriter {
         for v in &record.metrics {
             b.extend(v.to_le_bytes());
         }
+        b.extend((record.replicate_messages.len() as u32).to_le_bytes());
+        for m in &record.replicate_messages {
+            b.extend((m.len() as u32).to_le_bytes());
+            b.extend(m.as_bytes());
+        }
         let sum = checksum(b);
         b.extend(sum.to_le_bytes());
         self.file.write_all(b)
@@ -296,6 +314,7 @@ pub struct JournalEntry {
     row: usize,
     status: Status,
     message: String,
+    replicate_messages: Vec<String>,
     n_series: usize,
     /// The partial file's length before the chunks were written.
     before: u64,
@@ -345,6 +364,7 @@ impl JournalEntry {
             row: self.row,
             status: self.status,
             message: self.message.clone(),
+            replicate_messages: self.replicate_messages.clone(),
             n_series: self.n_series,
             bytes,
             chunks,
@@ -495,6 +515,14 @@ impl JournalReader {
             return None;
         }
         let metrics = take(8 * h.n_metrics, &mut b)?;
+        let n_messages = take(4, &mut b)?;
+        let n_messages = u32_at(&b, n_messages.start);
+        let mut replicate_messages = Vec::new();
+        for _ in 0..n_messages {
+            let len = take(4, &mut b)?;
+            let text = take(u64::from(u32_at(&b, len.start)), &mut b)?;
+            replicate_messages.push(std::str::from_utf8(&b[text]).ok()?.to_owned());
+        }
         let sum = take(4, &mut b)?;
         if checksum(&b[..sum.start]) != u32_at(&b, sum.start) {
             return None;
@@ -507,6 +535,7 @@ impl JournalReader {
             row,
             status,
             message,
+            replicate_messages,
             n_series,
             before,
             chunks,
@@ -536,6 +565,11 @@ mod tests {
             },
             spectra: if ok { vec![vec![0.25; 2]] } else { Vec::new() },
             metrics: vec![row as f64, f64::NAN],
+            replicate_messages: if ok {
+                vec![String::new(), format!("replicate 1 of row {row} failed")]
+            } else {
+                Vec::new()
+            },
             cost: Default::default(),
         }
     }
@@ -627,6 +661,7 @@ mod tests {
             assert_eq!(format!("{got:?}"), format!("{want:?}")); // NaN-aware equality
         }
         assert_eq!(read[1].message, "step size underflow");
+        assert_eq!(read[0].replicate_messages[1], "replicate 1 of row 4 failed");
         assert_eq!(read[1].chunk_bytes(), 0);
         for other in [
             JournalHeader {

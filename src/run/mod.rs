@@ -85,6 +85,9 @@ pub struct RunSummary {
     pub ok: usize,
     /// Cases that failed (recorded in the file with their message).
     pub failed: usize,
+    /// Perturbed replicates of ok cases that failed (recorded in the file with their
+    /// message, `replicate_error_message`).
+    pub failed_replicates: usize,
     /// Cases taken from the journal of an interrupted run.
     pub resumed: usize,
     /// Cases the journal of an interrupted run recorded but whose chunks were not
@@ -169,6 +172,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let mut tally = Tally {
         ok: replayed.ok,
         failed: replayed.failed,
+        failed_replicates: replayed.failed_replicates,
         stats,
     };
     let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
@@ -201,6 +205,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         cases: rows.len(),
         ok: tally.ok,
         failed: tally.failed,
+        failed_replicates: tally.failed_replicates,
         resumed,
         rerun: replayed.journaled - resumed,
         complete_before: false,
@@ -400,10 +405,14 @@ fn complete_result(
         .verify()
         .map_err(|e| other(&format!("it is damaged: {e}")))?;
     let failed = statuses.iter().filter(|&&s| s == Status::Failed).count();
+    let failed_replicates = reader
+        .failed_replicates()
+        .map_err(OutputError::file(output))?;
     Ok(RunSummary {
         cases: n_rows,
         ok: n_rows - failed,
         failed,
+        failed_replicates,
         resumed: 0,
         rerun: 0,
         complete_before: true,
@@ -463,6 +472,7 @@ struct Work<'a> {
 struct Tally {
     ok: usize,
     failed: usize,
+    failed_replicates: usize,
     stats: RunStats,
 }
 
@@ -474,6 +484,7 @@ impl Tally {
         self.stats.journal += thread_cpu() - cpu_hdf5;
         self.stats.stored_bytes += rec.chunk_bytes() as u64;
         self.stats.sends += 1;
+        self.failed_replicates += rec.failed_replicates();
         if rec.status() == Status::Ok {
             self.ok += 1;
             let values = layout.series.len() * layout.times.len()
@@ -577,6 +588,8 @@ struct Replayed {
     ok: usize,
     /// Replayed cases that failed.
     failed: usize,
+    /// Failed replicates of the replayed cases.
+    failed_replicates: usize,
 }
 
 /// Replays the cases `reader`'s journal recorded below row `n_rows` into `writer` (the
@@ -621,6 +634,7 @@ fn replay(
             .write(&rec, before)
             .map_err(OutputError::io("append to", &new_journal_path))?;
         replayed.done.insert(rec.row());
+        replayed.failed_replicates += rec.failed_replicates();
         if rec.status() == Status::Ok {
             replayed.ok += 1
         } else {

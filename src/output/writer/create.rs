@@ -70,12 +70,7 @@ impl Creator<'_> {
         let spec = VarSpec::new(STATUS, "1", "case status");
         let ds = self.empty::<i8>(STATUS, &[l.n_cases()], Status::Pending.code())?;
         self.finish_var(&ds, &spec, None, &[case])?;
-        let flags: Vec<i8> = Status::ALL.iter().map(|s| s.code()).collect();
-        ds.new_attr_builder()
-            .with_data(&flags[..])
-            .create("flag_values")
-            .at(self.path, STATUS)?;
-        attributes::write_str(&ds, "flag_meanings", Status::FLAG_MEANINGS).at(self.path, STATUS)?;
+        status_flags(&ds).at(self.path, STATUS)?;
 
         let spec = VarSpec::new(
             ERROR_MESSAGE,
@@ -90,6 +85,41 @@ impl Creator<'_> {
         self.finish_var(&ds, &spec, None, &[case])?;
 
         Ok(())
+    }
+
+    /// The `[case, replicate]` variables of a file with replicates: each replicate's
+    /// status (a CF flag variable) and error message, written whole like the
+    /// replicate metrics.
+    fn replicate_variables(
+        &self,
+        case: &Dataset,
+        replicate: &Dataset,
+    ) -> Result<(), StudyFileError> {
+        let shape = [self.layout.n_cases(), self.layout.replicates.len()];
+        let spec = VarSpec::new(REPLICATE_STATUS, "1", "replicate status");
+        let ds = self
+            .file
+            .new_dataset::<i8>()
+            .fill_value(Status::Pending.code())
+            .chunk(whole_chunks(&shape))
+            .fletcher32()
+            .shape(shape)
+            .create(REPLICATE_STATUS)
+            .at(self.path, REPLICATE_STATUS)?;
+        self.finish_var(&ds, &spec, None, &[case, replicate])?;
+        status_flags(&ds).at(self.path, REPLICATE_STATUS)?;
+
+        let name = REPLICATE_ERROR_MESSAGE;
+        let spec = VarSpec::new(name, "1", "why the replicate failed (empty if it did not)");
+        let empty = vec![String::new(); shape[0] * shape[1]];
+        let ds = self
+            .file
+            .new_dataset::<VarLenUnicode>()
+            .shape(shape)
+            .create(name)
+            .and_then(|ds| super::write_strings(&ds, &empty).map(|()| ds))
+            .at(self.path, name)?;
+        self.finish_var(&ds, &spec, None, &[case, replicate])
     }
 
     /// Creates every dimension and variable of the layout, with the root attributes.
@@ -131,6 +161,9 @@ impl Creator<'_> {
             if !ids.is_empty() {
                 let dim = self.coordinate(name, &ids32(ids), meta, dimid)?;
                 dimid += 1;
+                if name == REPLICATE {
+                    self.replicate_variables(&case, &dim)?;
+                }
                 self.whole_rows(&dim, ids.len(), specs, role, &case)?;
             }
         }
@@ -361,6 +394,15 @@ impl Creator<'_> {
         ];
         text::write_digest(ds, text::ATTRIBUTES_DIGEST_ATTR, &described).at(self.path, name)
     }
+}
+
+/// The CF flag attributes of a [`Status`] variable.
+fn status_flags(ds: &Dataset) -> hdf5::Result<()> {
+    let flags: Vec<i8> = Status::ALL.iter().map(|s| s.code()).collect();
+    ds.new_attr_builder()
+        .with_data(&flags[..])
+        .create("flag_values")?;
+    attributes::write_str(ds, "flag_meanings", Status::FLAG_MEANINGS)
 }
 
 /// Elements in a chunk of a variable written whole (1-D variables, `[case, dim]`

@@ -15,8 +15,8 @@ use super::encode::{self, ChunkEncoder};
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
-    FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REVOLUTION, ROLE_ATTR,
-    STATUS, TIME, TIME_UNITS,
+    FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
+    REPLICATE_ERROR_MESSAGE, REPLICATE_STATUS, REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
@@ -51,6 +51,11 @@ pub struct Record<'a, Row: ?Sized> {
     pub status: Status,
     /// Why it failed; empty for a successful case. NUL bytes are stored as U+FFFD.
     pub message: &'a str,
+    /// In a file with replicates, for a successful case: why each replicate failed,
+    /// one per [`Layout::replicates`] entry, empty where it did not (`replicate_status`
+    /// says ok or failed from it). Empty otherwise: a failed case's replicate 0 has
+    /// its `message`, and its perturbed replicates stay pending (they did not run).
+    pub replicate_messages: &'a [String],
 }
 
 impl<Row: ?Sized> Clone for Record<'_, Row> {
@@ -134,6 +139,14 @@ pub struct StudyWriter {
 /// entries: their size on disk).
 const METADATA_CACHE_BYTES: usize = 512 * 1024;
 
+/// `replicate_status` and `replicate_error_message`: their datasets and values,
+/// row-major, and the number of replicates.
+struct ReplicateScalars {
+    status: (Dataset, Vec<i8>),
+    messages: (Dataset, Vec<String>),
+    width: usize,
+}
+
 /// The `[case]` scalars and `[case, replicate]` and `[case, revolution]` metrics of
 /// every row, written whole by [`Scalars::write`].
 struct Scalars {
@@ -144,6 +157,8 @@ struct Scalars {
     metrics: Vec<(Dataset, Vec<f64>, usize)>,
     status: (Dataset, Vec<i8>),
     messages: (Dataset, Vec<String>),
+    /// In a file with replicates: `replicate_status` and `replicate_error_message`.
+    replicates: Option<ReplicateScalars>,
     /// Something changed since the last write.
     dirty: bool,
 }
@@ -185,18 +200,33 @@ impl Scalars {
             .collect::<Result<_, StudyFileError>>()?;
         let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
         let messages = read_messages(&rows.error_message, layout.n_cases(), path)?;
+        let replicates = match &rows.replicates {
+            Some((status, messages)) => {
+                let n = layout.n_cases() * n_replicates;
+                let codes = status.read_raw::<i8>().at(path, REPLICATE_STATUS)?;
+                let texts = read_messages(messages, n, path)?;
+                Some(ReplicateScalars {
+                    status: (status.clone(), codes),
+                    messages: (messages.clone(), texts),
+                    width: n_replicates,
+                })
+            }
+            None => None,
+        };
         Ok(Self {
             path: path.to_owned(),
             metrics,
             status: (rows.status.clone(), status),
             messages: (rows.error_message.clone(), messages),
+            replicates,
             dirty: false,
         })
     }
 
     /// Records row `row`'s metrics (if any, laid out as [`Record::metrics`]),
-    /// status and message.
-    fn set(&mut self, row: usize, metrics: &[f64], status: Status, message: &str) {
+    /// status and messages.
+    fn set<R: ?Sized>(&mut self, row: usize, record: &Record<'_, R>) {
+        let (metrics, status, message) = (record.metrics, record.status, record.message);
         if !metrics.is_empty() {
             let mut at = 0;
             for (_, column, width) in &mut self.metrics {
@@ -206,6 +236,21 @@ impl Scalars {
         }
         self.status.1[row] = status.code();
         self.messages.1[row] = message.replace('\0', "\u{FFFD}");
+        if let Some(r) = &mut self.replicates {
+            let width = r.width;
+            for k in 0..width {
+                let (state, text) = match status {
+                    Status::Ok => match record.replicate_messages.get(k) {
+                        Some(m) if !m.is_empty() => (Status::Failed, m.as_str()),
+                        _ => (Status::Ok, ""),
+                    },
+                    Status::Failed if k == 0 => (Status::Failed, message),
+                    _ => (Status::Pending, ""),
+                };
+                r.status.1[row * width + k] = state.code();
+                r.messages.1[row * width + k] = text.replace('\0', "\u{FFFD}");
+            }
+        }
         self.dirty = true;
     }
 
@@ -218,24 +263,28 @@ impl Scalars {
         for (ds, values, _) in &self.metrics {
             ds.write_raw(values).at(path, &ds.name())?;
         }
-        let messages = self
-            .messages
-            .1
-            .iter()
-            .map(|m| attributes::vlen(m))
-            .collect::<hdf5::Result<Vec<_>>>()
-            .at(path, ERROR_MESSAGE)?;
-        self.messages
-            .0
-            .write_raw(&messages)
-            .and_then(|()| {
-                text::write_digest(&self.messages.0, text::DIGEST_ATTR, &self.messages.1)
-            })
-            .at(path, ERROR_MESSAGE)?;
+        if let Some(r) = &self.replicates {
+            write_strings(&r.messages.0, &r.messages.1).at(path, REPLICATE_ERROR_MESSAGE)?;
+            r.status
+                .0
+                .write_raw(&r.status.1)
+                .at(path, REPLICATE_STATUS)?;
+        }
+        write_strings(&self.messages.0, &self.messages.1).at(path, ERROR_MESSAGE)?;
         self.status.0.write_raw(&self.status.1).at(path, STATUS)?;
         self.dirty = false;
         Ok(())
     }
+}
+
+/// Writes `texts` into the string variable `ds` whole, with their digest.
+pub(super) fn write_strings(ds: &Dataset, texts: &[String]) -> hdf5::Result<()> {
+    let values = texts
+        .iter()
+        .map(|m| attributes::vlen(m))
+        .collect::<hdf5::Result<Vec<_>>>()?;
+    ds.write_raw(&values)?;
+    text::write_digest(ds, text::DIGEST_ATTR, texts)
 }
 
 impl Drop for Scalars {
@@ -372,8 +421,7 @@ impl StudyWriter {
             encoder.encode(values, chunk);
             write_row_chunk(ds, row, chunk).at(path, &spec.name)?;
         }
-        self.scalars
-            .set(row, record.metrics, record.status, record.message);
+        self.scalars.set(row, record);
         Ok(())
     }
 
@@ -395,8 +443,7 @@ impl StudyWriter {
         for (chunk, ds, spec) in case_arrays(&self.rows, &self.layout, record) {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
-        self.scalars
-            .set(row, record.metrics, record.status, record.message);
+        self.scalars.set(row, record);
         Ok(before)
     }
 
@@ -436,6 +483,18 @@ impl StudyWriter {
                     self.layout.revolutions.len(),
                     self.layout.order_spectra.len(),
                     self.layout.orders.len(),
+                ),
+            ));
+        }
+        let n_replicates = self.layout.replicates.len();
+        let replicates = record.replicate_messages.len();
+        if replicates != 0 && (replicates != n_replicates || record.status != Status::Ok) {
+            return Err(self.record_error(
+                "replicate_messages",
+                format!(
+                    "{replicates} messages for a case of status {:?} with {n_replicates} \
+                     replicates: one per replicate of an ok case, or none",
+                    record.status
                 ),
             ));
         }
