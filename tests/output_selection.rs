@@ -287,3 +287,64 @@ fn the_dry_run_shows_the_stored_series() {
         "{text}"
     );
 }
+
+/// `spectra: {max_frequency: "1 kHz"}`: the file keeps the bins up to 1 kHz of every
+/// `[case, frequency]` variable (amplitude, envelope and SK spectra), the same bits as
+/// the first bins of the full study's; metrics, which use every bin, are unchanged.
+#[test]
+fn max_frequency_stores_the_bins_up_to_it_and_changes_no_metric() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let envelope = "envelope: {channels: [bearing_force], band: auto}\noutput: {series: none}\n";
+    let full = run(d, "full", envelope);
+    let cut = run(
+        d,
+        "cut",
+        &format!("{envelope}spectra: {{max_frequency: \"1 kHz\"}}\n"),
+    );
+    let (lf, lc) = (full.layout(), cut.layout());
+    // 0.04 s analysed at 10 kHz: 400 samples, 25 Hz bins, 0 ..= 1000 Hz is 41 of them.
+    assert_eq!(lf.frequencies.len(), 201);
+    assert_eq!(lc.frequencies.len(), 41);
+    assert_eq!(lc.frequencies[..], lf.frequencies[..41]);
+    assert_eq!(lc.spectra, lf.spectra);
+    assert!(lc
+        .spectra
+        .iter()
+        .any(|s| s.name.ends_with("_spectral_kurtosis")));
+    assert!(matches!(
+        cut.attribute("max_frequency"),
+        Some(AttrValue::F64(f)) if *f == 1000.0
+    ));
+    for row in 0..lf.n_cases() {
+        let (f, c) = (
+            read_case_but_wall_time(&full, row),
+            read_case_but_wall_time(&cut, row),
+        );
+        assert_eq!(bits(&f.metrics), bits(&c.metrics), "metrics of row {row}");
+        for (x, y) in f.spectra.iter().zip(&c.spectra) {
+            assert_eq!(bits(&x[..41]), bits(y), "spectra of row {row}");
+        }
+    }
+    let size = |name: &str| std::fs::metadata(d.join(name)).unwrap().len();
+    assert!(
+        size("cut.h5") < size("full.h5"),
+        "{} {}",
+        size("cut.h5"),
+        size("full.h5")
+    );
+    for (value, needle) in [
+        ("\"0 Hz\"", "0 Hz\" is not allowed"),
+        ("\"6 kHz\"", "at most sample_rate/2 = 5000 Hz"),
+        ("\"1 s\"", "spectra.max_frequency"),
+    ] {
+        let text = format!("{BASE}spectra: {{max_frequency: {value}}}\n");
+        let err = Study::from_yaml(&text, Path::new("grid.yaml"))
+            .expect_err(value)
+            .to_string();
+        assert!(
+            err.contains("`spectra.max_frequency`") && err.contains(needle),
+            "{err}"
+        );
+    }
+}

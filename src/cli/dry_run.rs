@@ -78,10 +78,10 @@ pub(super) fn dry_run(
     };
     let n_time = study.stored_times().len();
     let n_series = study.stored_series_count();
-    let n_freq = study.analysis_window().len() / 2 + 1;
+    let n_freq = study.stored_bins();
     let width = if study.float32 { 4.0 } else { 8.0 };
     let raw_bytes = rows.len() as f64
-        * (n_series as f64 * n_time as f64 + study.spectrum_channels.len() as f64 * n_freq as f64)
+        * (n_series as f64 * n_time as f64 + study.stored_spectra_count() as f64 * n_freq as f64)
         * width;
     let estimate = study.memory_estimate(limits.jobs);
     let calibration = calibrate(study, &rows);
@@ -89,7 +89,7 @@ pub(super) fn dry_run(
         study,
         rows,
         series: (n_series, n_time),
-        spectra: study.spectrum_channels.len(),
+        spectra: study.stored_spectra_count(),
         raw_bytes,
         memory: (estimate.total, estimate.to_string()),
         calibration,

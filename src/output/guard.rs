@@ -58,8 +58,8 @@ pub(super) fn deadline(path: &Path, per_byte: bool) -> Duration {
 }
 
 /// Runs `reads` of `file` in a forked child process and says whether it survived
-/// (see the module doc). Its result is not passed back: only whether it crashed. `reads` runs
-/// only in the child, never in this process.
+/// (see the module doc). Its result is not passed back: only whether it crashed.
+/// `reads` runs only in the child, never in this process.
 #[cfg(unix)]
 pub(super) fn check<E>(
     timeout: Duration,
@@ -67,14 +67,43 @@ pub(super) fn check<E>(
     reads: impl FnOnce() -> Result<(), E>,
 ) -> Checked {
     use std::os::unix::fs::MetadataExt;
-    use std::time::Instant;
 
     let file = std::fs::metadata(file).ok().map(|m| (m.dev(), m.ino()));
-    // The fork holds hdf5-metno's (reentrant) library lock, and the child never
-    // releases it: no other thread was inside libhdf5 at the fork, and the child's own
-    // libhdf5 calls take the lock again without waiting (releasing it could mean waking
-    // a thread that was waiting for it, which the child does not have).
-    let pid = hdf5::sync::sync(|| {
+    let pid = spawn(file, reads);
+    if pid < 0 {
+        return Checked::Crashed(format!(
+            "cannot start the process that checks it ({})",
+            std::io::Error::last_os_error()
+        ));
+    }
+    let status = match wait(pid, timeout) {
+        Ok(status) => status,
+        Err(reason) => return Checked::Crashed(reason),
+    };
+    if libc::WIFSIGNALED(status) {
+        let signal = libc::WTERMSIG(status);
+        return Checked::Crashed(format!(
+            "reading it crashes libhdf5 ({}, in a process that checked it)",
+            signal_name(signal)
+        ));
+    }
+    match libc::WEXITSTATUS(status) {
+        0 | 1 => Checked::Survived,
+        _ => Checked::Crashed("reading it panicked (in a process that checked it)".into()),
+    }
+}
+
+/// Forks the child that runs `reads` (exit 0 if they succeed, 1 if they fail, 2 if
+/// they panic) once it has closed what it inherited but the descriptors on `file`
+/// (device, inode); returns its pid, or -1 if it could not be started.
+///
+/// The fork holds hdf5-metno's (reentrant) library lock, and the child never releases
+/// it: no other thread was inside libhdf5 at the fork, and the child's own libhdf5
+/// calls take the lock again without waiting (releasing it could mean waking a thread
+/// that was waiting for it, which the child does not have).
+#[cfg(unix)]
+fn spawn<E>(file: Option<(u64, u64)>, reads: impl FnOnce() -> Result<(), E>) -> i32 {
+    hdf5::sync::sync(|| {
         // The child says on this pipe when it has closed what it inherited; until then
         // this process keeps the library lock, so no thread of it opens or closes an
         // HDF5 file while the child still shares its descriptors and their locks.
@@ -118,27 +147,27 @@ pub(super) fn check<E>(
             libc::close(r);
         }
         pid
-    });
-    if pid < 0 {
-        return Checked::Crashed(format!(
-            "cannot start the process that checks it ({})",
-            std::io::Error::last_os_error()
-        ));
-    }
-    let start = Instant::now();
+    })
+}
+
+/// Waits for the child `pid` for at most `timeout`: its wait status, or why there is
+/// none (it was killed at the deadline, or waiting failed).
+#[cfg(unix)]
+fn wait(pid: i32, timeout: Duration) -> Result<i32, String> {
+    let start = std::time::Instant::now();
     let mut status = 0;
     loop {
         // SAFETY: `pid` is our child; `status` is a valid out pointer.
         let r = unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) };
         if r == pid {
-            break;
+            return Ok(status);
         }
         if r < 0 {
             let e = std::io::Error::last_os_error();
             if e.kind() == std::io::ErrorKind::Interrupted {
                 continue;
             }
-            return Checked::Crashed(format!("cannot wait for the process that checks it ({e})"));
+            return Err(format!("cannot wait for the process that checks it ({e})"));
         }
         if start.elapsed() > timeout {
             // SAFETY: `pid` is our child, not reaped yet.
@@ -146,13 +175,13 @@ pub(super) fn check<E>(
                 libc::kill(pid, libc::SIGKILL);
                 libc::waitpid(pid, &mut status, 0);
             }
-            return Checked::Crashed(format!(
+            return Err(format!(
                 "reading it with libhdf5 did not finish in {} s (set STUDYRUN_CHECK_TIMEOUT to wait longer)",
                 timeout.as_secs_f64()
             ));
         }
-        let waited = start.elapsed();
         // Short sleeps first: most checks take milliseconds.
+        let waited = start.elapsed();
         std::thread::sleep(Duration::from_millis(
             if waited < Duration::from_millis(50) {
                 1
@@ -160,17 +189,6 @@ pub(super) fn check<E>(
                 20
             },
         ));
-    }
-    if libc::WIFSIGNALED(status) {
-        let signal = libc::WTERMSIG(status);
-        return Checked::Crashed(format!(
-            "reading it crashes libhdf5 ({}, in a process that checked it)",
-            signal_name(signal)
-        ));
-    }
-    match libc::WEXITSTATUS(status) {
-        0 | 1 => Checked::Survived,
-        _ => Checked::Crashed("reading it panicked (in a process that checked it)".into()),
     }
 }
 

@@ -404,24 +404,18 @@ impl Layout {
         distinct(CASE, &self.case_ids)?;
         distinct(REFERENCE, &self.reference_ids)?;
         distinct(REPLICATE, &self.replicates)?;
-        if self.replicates.is_empty() && !self.replicate_metrics.is_empty() {
-            return Err(format!(
-                "`{}` needs the `{REPLICATE}` dimension, which is empty",
-                self.replicate_metrics[0].name
-            ));
-        }
         distinct(REVOLUTION, &self.revolutions)?;
-        if self.revolutions.is_empty() && !self.revolution_metrics.is_empty() {
-            return Err(format!(
-                "`{}` needs the `{REVOLUTION}` dimension, which is empty",
-                self.revolution_metrics[0].name
-            ));
-        }
-        if self.orders.is_empty() && !self.order_spectra.is_empty() {
-            return Err(format!(
-                "`{}` needs the `{ORDER}` dimension, which is empty",
-                self.order_spectra[0].name
-            ));
+        for (dim, len, specs) in [
+            (REPLICATE, self.replicates.len(), &self.replicate_metrics),
+            (REVOLUTION, self.revolutions.len(), &self.revolution_metrics),
+            (ORDER, self.orders.len(), &self.order_spectra),
+        ] {
+            if let (0, Some(spec)) = (len, specs.first()) {
+                return Err(format!(
+                    "`{}` needs the `{dim}` dimension, which is empty",
+                    spec.name
+                ));
+            }
         }
         if self.storage.deflate_level > 9 {
             return Err(format!(
@@ -459,9 +453,21 @@ impl Layout {
                 "`{REFERENCE_INDEX}` holds row {bad}, but there are {n_ref} references"
             ));
         }
+        self.check_parameters()?;
+        self.check_names()?;
+        self.check_attributes()
+    }
+
+    /// Every parameter has one value per case (reference parameters per reference),
+    /// no text one a NUL.
+    fn check_parameters(&self) -> Result<(), String> {
         for (params, dim, len) in [
-            (&self.parameters, CASE, n_case),
-            (&self.reference_parameters, REFERENCE, n_ref),
+            (&self.parameters, CASE, self.case_ids.len()),
+            (
+                &self.reference_parameters,
+                REFERENCE,
+                self.reference_ids.len(),
+            ),
         ] {
             for p in params {
                 if p.values.len() != len {
@@ -481,8 +487,7 @@ impl Layout {
                 }
             }
         }
-        self.check_names()?;
-        self.check_attributes()
+        Ok(())
     }
 
     /// All caller variable specs, in file order.

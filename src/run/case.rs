@@ -70,11 +70,6 @@ pub(crate) fn run_case(
 ) -> CaseResult {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
-    let n_metrics = metric_specs(study.envelope.as_ref()).len();
-    let n_values = study_metric_specs(study).len()
-        + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len()
-        + study.revolutions * revolution_metric_specs().len()
-        + study.order_spectrum_count() * study.orders.map_or(0, |o| o.samples / 2 + 1);
     let params = &case.params;
     let simulated = simulate(params, &study.solver, &study.sampling);
     let cpu_simulated = thread_cpu();
@@ -82,21 +77,7 @@ pub(crate) fn run_case(
         simulate: cpu_simulated - cpu_start,
         analysis: 0.0,
     };
-    // A failure keeps no series; its metrics are NaN but for the wall time.
-    let failed = |message: String, cost: CaseCost| {
-        let mut metrics = vec![f64::NAN; n_values];
-        metrics[n_metrics - 1] = start.elapsed().as_secs_f64();
-        CaseResult {
-            row,
-            status: Status::Failed,
-            message,
-            series: Vec::new(),
-            spectra: Vec::new(),
-            metrics,
-            replicate_messages: Vec::new(),
-            cost,
-        }
-    };
+    let failed = |message: String, cost: CaseCost| failed(study, row, message, cost, start);
     let out = match simulated.map_err(|e| e.to_string()).and_then(|out| {
         check_eccentricity(params, &out)?;
         Ok(out)
@@ -117,13 +98,17 @@ pub(crate) fn run_case(
         orders,
     );
     let CaseAnalysis {
-        spectra,
+        mut spectra,
         mut metrics,
         order_spectra,
     } = match analysis {
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
     };
+    // The file keeps the bins up to `spectra.max_frequency`; the metrics used them all.
+    spectra
+        .iter_mut()
+        .for_each(|s| s.truncate(study.stored_bins()));
     // The per-revolution metrics reread the samples already analysed (docs/model.md §6.1).
     let per_revolution = (study.revolutions > 0).then(|| {
         let windows = revolution_windows(&params.drive(), &study.sampling, study.transient);
@@ -142,7 +127,7 @@ pub(crate) fn run_case(
     }
     metrics.extend(per_revolution.into_iter().flatten());
     metrics.extend(order_spectra.into_iter().flatten());
-    debug_assert_eq!(metrics.len(), n_values);
+    debug_assert_eq!(metrics.len(), metric_values(study));
     CaseResult {
         row,
         status: Status::Ok,
@@ -151,6 +136,37 @@ pub(crate) fn run_case(
         spectra,
         metrics,
         replicate_messages,
+        cost,
+    }
+}
+
+/// The number of metric values of a case record ([`CaseResult::metrics`]).
+fn metric_values(study: &Study) -> usize {
+    study_metric_specs(study).len()
+        + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len()
+        + study.revolutions * revolution_metric_specs().len()
+        + study.order_spectrum_count() * study.orders.map_or(0, |o| o.samples / 2 + 1)
+}
+
+/// The record of case row `row` failed with `message`: no series, its metrics NaN but
+/// the wall time since `start`.
+fn failed(
+    study: &Study,
+    row: usize,
+    message: String,
+    cost: CaseCost,
+    start: std::time::Instant,
+) -> CaseResult {
+    let mut metrics = vec![f64::NAN; metric_values(study)];
+    metrics[metric_specs(study.envelope.as_ref()).len() - 1] = start.elapsed().as_secs_f64();
+    CaseResult {
+        row,
+        status: Status::Failed,
+        message,
+        series: Vec::new(),
+        spectra: Vec::new(),
+        metrics,
+        replicate_messages: Vec::new(),
         cost,
     }
 }

@@ -175,6 +175,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         failed_replicates: replayed.failed_replicates,
         stats,
     };
+    let rerun = replayed.journaled - resumed;
     let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
     let work = Work {
         study,
@@ -201,17 +202,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     .map(|worker_stats| worker_stats.add_to(&mut tally.stats))?;
     progress.finish();
     tally.stats.finish = finish_file(writer, journal, data, &opts.output)?;
-    Ok(RunSummary {
-        cases: rows.len(),
-        ok: tally.ok,
-        failed: tally.failed,
-        failed_replicates: tally.failed_replicates,
-        resumed,
-        rerun: replayed.journaled - resumed,
-        complete_before: false,
-        wall_time: start.elapsed().as_secs_f64(),
-        stats: tally.stats,
-    })
+    Ok(tally.summary(rows.len(), (resumed, rerun), start))
 }
 
 /// The journal header of `study` run as `shard` into a file of `layout`: the study's
@@ -477,6 +468,22 @@ struct Tally {
 }
 
 impl Tally {
+    /// The summary of a run of `cases` cases that started at `start`, `resumed` of
+    /// them from the journal and `rerun` run again.
+    fn summary(self, cases: usize, (resumed, rerun): (usize, usize), start: Instant) -> RunSummary {
+        RunSummary {
+            cases,
+            ok: self.ok,
+            failed: self.failed,
+            failed_replicates: self.failed_replicates,
+            resumed,
+            rerun,
+            complete_before: false,
+            wall_time: start.elapsed().as_secs_f64(),
+            stats: self.stats,
+        }
+    }
+
     /// Counts `rec`, written between the CPU times `cpu` (start) and `cpu_hdf5`
     /// (HDF5 done; the journal's append followed).
     fn record(&mut self, rec: &JournalRecord, cpu: f64, cpu_hdf5: f64, layout: &Layout) {

@@ -339,6 +339,9 @@ pub struct SpectraSection {
     pub channels: Option<S<Vec<S<String>>>>,
     /// Also their order spectra over crank-angle orders (default false).
     pub orders: Option<S<bool>>,
+    /// Highest frequency stored of every `[case, frequency]` variable (default: the
+    /// Nyquist frequency, every bin).
+    pub max_frequency: Option<S<Scalar>>,
 }
 
 /// `envelope:` settings.

@@ -93,6 +93,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     sensors::check_realizations(&ctx, &sensors, &cases)?;
     let analysed = (&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
+    let max_frequency = analysis::max_frequency(&ctx, file.spectra.as_ref(), &sampling)?;
     let envelope = file
         .envelope
         .as_ref()
@@ -117,6 +118,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         transient,
         window,
         spectrum_channels,
+        max_frequency,
         envelope,
         orders,
         float32,

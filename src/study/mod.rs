@@ -105,6 +105,10 @@ pub struct Study {
     pub window: String,
     /// Channels transformed into spectra (simulated channels or sensor series).
     pub spectrum_channels: Vec<AnalysisChannel>,
+    /// Highest frequency the file stores of every `[case, frequency]` variable (Hz,
+    /// `spectra.max_frequency`); none: every bin up to the Nyquist frequency. The
+    /// analysis uses every bin either way ([`Study::stored_bins`]).
+    pub max_frequency: Option<f64>,
     /// The envelope analysis and condition indicators (`envelope:`); none when the
     /// grid has no `envelope:`, and then nothing of it is computed or stored.
     pub envelope: Option<EnvelopeSettings>,
@@ -360,8 +364,7 @@ impl Study {
             memory::Shape {
                 samples: self.sampling.len() as u64,
                 window: self.analysis_window().len() as u64,
-                spectra: self.spectrum_channels.len()
-                    + self.envelope.as_ref().map_or(0, |e| 2 * e.channels.len()),
+                spectra: self.stored_spectra_count(),
                 sensor_series: 2 * self.sensors.len(),
                 stored_series: self.stored_series_count(),
                 stored_samples: self.stored_times().len() as u64,
@@ -393,6 +396,30 @@ impl Study {
     /// duration` ([`Sampling::analysis_window`]).
     pub fn analysis_window(&self) -> Range<usize> {
         self.sampling.analysis_window(self.transient)
+    }
+
+    /// Frequency bins the file stores of every `[case, frequency]` variable: those of
+    /// the analysed window's spectrum (`window / 2 + 1`) up to
+    /// [`Study::max_frequency`].
+    pub fn stored_bins(&self) -> usize {
+        let n = self.analysis_window().len();
+        let all = if n == 0 { 0 } else { n / 2 + 1 };
+        match self.max_frequency {
+            // Bin k is at k·sample_rate/n; the tolerance keeps a bin the given
+            // frequency names exactly ("2 kHz" at 2000.0000000001 Hz after rounding).
+            Some(f) => {
+                let k = (f * n as f64 / self.sampling.sample_rate * (1.0 + 1e-12)).floor();
+                all.min(k as usize + 1)
+            }
+            None => all,
+        }
+    }
+
+    /// Spectra per case the file stores (`[case, frequency]` variables): the spectrum
+    /// channels', and an envelope spectrum and a spectral kurtosis per envelope
+    /// channel.
+    pub fn stored_spectra_count(&self) -> usize {
+        self.spectrum_channels.len() + 2 * self.envelope.as_ref().map_or(0, |e| e.channels.len())
     }
 
     /// Order spectra per case ([`crate::signal::order_spectrum_specs`]).

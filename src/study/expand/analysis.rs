@@ -3,6 +3,34 @@
 
 use super::*;
 
+/// The highest frequency the file stores of every spectrum (`spectra.max_frequency`,
+/// Hz), if given: above 0 and at most the Nyquist frequency.
+pub(super) fn max_frequency(
+    ctx: &Ctx<'_>,
+    spectra: Option<&SpectraSection>,
+    sampling: &Sampling,
+) -> Result<Option<f64>, StudyError> {
+    let Some(given) = spectra.and_then(|s| s.max_frequency.as_ref()) else {
+        return Ok(None);
+    };
+    let field = "spectra.max_frequency";
+    let f = ctx.quantity(given, Dimension::Frequency, field)?;
+    let nyquist = 0.5 * sampling.sample_rate;
+    if !(f > 0.0 && f <= nyquist) {
+        return Err(ctx.err(
+            Some(at(&given.referenced)),
+            field,
+            format!(
+                "{} is not allowed: a frequency above 0 and at most sample_rate/2 = {} Hz \
+                 (the Nyquist frequency)",
+                given.value,
+                number(nyquist)
+            ),
+        ));
+    }
+    Ok(Some(f))
+}
+
 /// The order analysis the file asks for (`spectra: {orders: true}`,
 /// `envelope: {orders: true}`), or `None`: `R` is the fewest whole revolutions any
 /// case turns between the analysed window's first and last samples (at least one),

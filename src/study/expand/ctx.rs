@@ -129,32 +129,28 @@ impl Ctx<'_> {
         check_speed(case, param.name).map_err(|m| self.err(Some(place), field, m))?;
         let x = self.quantity(v, param.dimension, field)?;
         if param.integer && (x.fract() != 0.0 || x < 0.0 || x > u32::MAX as f64) {
-            let rule = if param.name == "ball_count" {
-                match max_balls(&case.bearing) {
-                    Some(max) if max >= 3 => format!(
-                        "ball_count must be a whole number of balls from 3 to {max}, got {} \
-                         ({max} balls fit between these races)",
-                        v.value
-                    ),
-                    _ => format!(
-                        "ball_count must be a whole number of balls, 3 or more, got {}",
-                        v.value
-                    ),
-                }
-            } else if param.name == "noise_realization" {
-                format!(
-                    "noise_realization must be a whole number, 0 or more, got {}",
-                    v.value
-                )
-            } else {
-                format!(
-                    "{} must be a whole number of waves, 1 or more, got {}",
-                    param.name, v.value
-                )
-            };
+            let rule = whole_number_rule(case, param.name, &v.value);
             return Err(self.err(Some(place), field, rule));
         }
         Ok(Target::Param(param, x))
+    }
+}
+
+/// What a count parameter `name` allows, for the refusal of `value`, which is not a
+/// whole number in range.
+fn whole_number_rule(case: &CaseParams, name: &str, value: &Scalar) -> String {
+    match name {
+        "ball_count" => match max_balls(&case.bearing) {
+            Some(max) if max >= 3 => format!(
+                "ball_count must be a whole number of balls from 3 to {max}, got {value} \
+                 ({max} balls fit between these races)"
+            ),
+            _ => format!("ball_count must be a whole number of balls, 3 or more, got {value}"),
+        },
+        "noise_realization" => {
+            format!("noise_realization must be a whole number, 0 or more, got {value}")
+        }
+        _ => format!("{name} must be a whole number of waves, 1 or more, got {value}"),
     }
 }
 
@@ -170,44 +166,8 @@ impl Ctx<'_> {
         prov: &mut Provenance,
     ) -> Result<SpeedProfile, StudyError> {
         let place = Some(at(loc));
-        let fields: &[&str] = match s.profile.as_str() {
-            "ramp" => &["from", "to", "over"],
-            "sine" => &["mean", "amplitude", "frequency"],
-            "table" => &["time", "rpm"],
-            other => {
-                return Err(self.err(
-                    place,
-                    &format!("{prefix}.profile"),
-                    format!("unknown profile `{other}`; expected ramp, sine or table"),
-                ))
-            }
-        };
+        let fields = self.speed_fields(s, place, prefix)?;
         let profile = s.profile.as_str();
-        let given = [
-            ("from", s.from.is_some()),
-            ("to", s.to.is_some()),
-            ("over", s.over.is_some()),
-            ("mean", s.mean.is_some()),
-            ("amplitude", s.amplitude.is_some()),
-            ("frequency", s.frequency.is_some()),
-            ("time", s.time.is_some()),
-            ("rpm", s.rpm.is_some()),
-        ];
-        for (key, present) in given {
-            let takes = fields.contains(&key);
-            if present != takes {
-                let why = if present {
-                    format!("`{key}` is not a field of the {profile} profile")
-                } else {
-                    format!("the {profile} profile needs `{key}`")
-                };
-                return Err(self.err(
-                    place,
-                    &format!("{prefix}.{key}"),
-                    format!("{why}; it takes {}", fields.join(", ")),
-                ));
-            }
-        }
         let one = |v: &Option<Scalar>, dim: Dimension, key: &str| {
             let v = S::new(v.clone().unwrap_or(Scalar::Num(f64::NAN)), *loc, *loc);
             self.quantity(&v, dim, &format!("{prefix}.{key}"))
@@ -248,5 +208,54 @@ impl Ctx<'_> {
             }
         }
         Ok(p)
+    }
+
+    /// The fields of the speed profile `s` (at `place`, written at `prefix`), checked:
+    /// a known profile, given exactly its fields.
+    fn speed_fields(
+        &self,
+        s: &SpeedSection,
+        place: Option<(u64, u64)>,
+        prefix: &str,
+    ) -> Result<&'static [&'static str], StudyError> {
+        let fields: &'static [&'static str] = match s.profile.as_str() {
+            "ramp" => &["from", "to", "over"],
+            "sine" => &["mean", "amplitude", "frequency"],
+            "table" => &["time", "rpm"],
+            other => {
+                return Err(self.err(
+                    place,
+                    &format!("{prefix}.profile"),
+                    format!("unknown profile `{other}`; expected ramp, sine or table"),
+                ))
+            }
+        };
+        let profile = s.profile.as_str();
+        let given = [
+            ("from", s.from.is_some()),
+            ("to", s.to.is_some()),
+            ("over", s.over.is_some()),
+            ("mean", s.mean.is_some()),
+            ("amplitude", s.amplitude.is_some()),
+            ("frequency", s.frequency.is_some()),
+            ("time", s.time.is_some()),
+            ("rpm", s.rpm.is_some()),
+        ];
+        for (key, present) in given {
+            let takes = fields.contains(&key);
+            if present != takes {
+                let why = if present {
+                    format!("`{key}` is not a field of the {profile} profile")
+                } else {
+                    format!("the {profile} profile needs `{key}`")
+                };
+                return Err(self.err(
+                    place,
+                    &format!("{prefix}.{key}"),
+                    format!("{why}; it takes {}", fields.join(", ")),
+                ));
+            }
+        }
+        Ok(fields)
     }
 }

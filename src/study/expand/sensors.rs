@@ -6,7 +6,7 @@ use std::collections::HashSet;
 use super::{at, channel_named, Ctx, Effects};
 use crate::signal::sensor::{Noise, Sensor, Transducer, CLEAN_SUFFIX};
 use crate::simulate::Sampling;
-use crate::study::config::{SensorSection, S};
+use crate::study::config::{NoiseSection, SensorSection, S};
 use crate::study::units::Dimension;
 use crate::study::{Case, StudyError};
 
@@ -95,6 +95,29 @@ pub(super) fn check_names(
     Ok(())
 }
 
+/// A sensor's `noise`, its SNR within [`SNR_DB`] (`field` names it).
+fn noise(ctx: &Ctx<'_>, n: &NoiseSection, field: &str) -> Result<Noise, StudyError> {
+    let snr = &n.snr_db;
+    if !(SNR_DB.contains(&snr.value)) {
+        return Err(ctx.err(
+            Some(at(&snr.referenced)),
+            field,
+            format!(
+                "{} is not allowed: a signal-to-noise ratio from {} to {} dB (below, the \
+                 noise's fourth powers in the metrics overflow; above, the noise is under \
+                 the series' rounding)",
+                snr.value,
+                SNR_DB.start(),
+                SNR_DB.end()
+            ),
+        ));
+    }
+    Ok(Noise {
+        snr_db: snr.value,
+        seed: n.seed.as_ref().map_or(0, |s| s.value),
+    })
+}
+
 /// The sensors of `list` for a study sampled as `sampling`; their names are checked
 /// against the study's other variables by [`check_names`].
 pub(super) fn sensors(
@@ -146,30 +169,11 @@ pub(super) fn sensors(
                 format!("{zeta}; expected a finite damping ratio > 0"),
             ));
         }
-        let noise = match &s.noise {
-            None => None,
-            Some(n) => {
-                let snr = &n.value.snr_db;
-                if !(SNR_DB.contains(&snr.value)) {
-                    return Err(ctx.err(
-                        Some(at(&snr.referenced)),
-                        &field("noise.snr_db"),
-                        format!(
-                            "{} is not allowed: a signal-to-noise ratio from {} to {} dB \
-                             (below, the noise's fourth powers in the metrics overflow; \
-                             above, the noise is under the series' rounding)",
-                            snr.value,
-                            SNR_DB.start(),
-                            SNR_DB.end()
-                        ),
-                    ));
-                }
-                Some(Noise {
-                    snr_db: snr.value,
-                    seed: n.value.seed.as_ref().map_or(0, |s| s.value),
-                })
-            }
-        };
+        let noise = s
+            .noise
+            .as_ref()
+            .map(|n| noise(ctx, &n.value, &field("noise.snr_db")))
+            .transpose()?;
         sensors.push(Sensor {
             name: name.clone(),
             channel,

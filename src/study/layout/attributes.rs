@@ -86,6 +86,9 @@ fn study_attributes(
 /// threshold, the sampled design, the envelope analysis and the order analysis.
 fn section_attributes(study: &Study) -> Vec<(String, AttrValue)> {
     let mut attributes = Vec::new();
+    if let Some(f) = study.max_frequency {
+        attributes.push(("max_frequency".to_string(), f.into()));
+    }
     if let Some(r) = &study.replicates {
         attributes.extend([
             ("replicates".to_string(), (r.count as i64).into()),

@@ -63,7 +63,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
         times: study.stored_times(),
-        frequencies: frequencies(n_window, study.sampling.sample_rate),
+        frequencies: frequencies(n_window, study.sampling.sample_rate)
+            .into_iter()
+            .take(study.stored_bins())
+            .collect(),
         reference_ids: (0..study.references.len() as u64).collect(),
         series: variables::stored_series_specs(study),
         spectra: study
