@@ -199,3 +199,40 @@ fn completions_man_page_and_version_are_printed() {
     let expected = format!("studyrun {} (commit ", env!("CARGO_PKG_VERSION"));
     assert!(version.starts_with(&expected), "{version}");
 }
+
+/// `--dry-run --json`'s `file_bytes` within 30 % of the file the run writes, for a
+/// grid, a design, a replicates and an envelope study (the size of a case's stored
+/// chunks comes from its calibration run, so the estimate follows the compression).
+#[test]
+fn the_dry_run_estimates_the_file_size_within_30_percent() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let head = "duration: 0.1\nsample_rate: 20000\ntransient: \"0.02 s\"\n\
+                bearing: {damping: 300, waviness: {number: 35, amplitude: \"4 um\"}}\n";
+    let grid = "grid: {location: [crank_ground, crank_rod], rpm: [300, 600]}\n";
+    for (name, rest) in [
+        ("grid", grid.to_string()),
+        (
+            "design",
+            "design: {method: lhs, samples: 6, parameters: {clearance: {min: \"20 um\", max: \"60 um\"}, rpm: {min: 300, max: 600}}}\n".to_string(),
+        ),
+        (
+            "replicates",
+            format!("{grid}replicates: {{count: 3, perturbation: \"1 nm\"}}\n"),
+        ),
+        (
+            "envelope",
+            format!("{grid}envelope: {{channels: [bearing_force], band: auto}}\n"),
+        ),
+    ] {
+        let yaml = format!("{name}.yaml");
+        write(d, &yaml, &format!("name: {name}\n{head}{rest}"));
+        let (dry, _) = json_of(&studyrun(d, &[&yaml, "--dry-run", "--json"]));
+        let estimate = dry["file_bytes"].as_f64().expect("an estimate");
+        let out = studyrun(d, &[&yaml, "-o", &format!("{name}.h5"), "-q"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let size = std::fs::metadata(d.join(format!("{name}.h5"))).unwrap().len() as f64;
+        let ratio = estimate / size;
+        assert!((0.7..=1.3).contains(&ratio), "{name}: estimated {estimate}, wrote {size}");
+    }
+}

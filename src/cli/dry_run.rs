@@ -1,7 +1,8 @@
-//! `studyrun GRID --dry-run`: the case table, the memory estimate, the file size and
-//! a time estimate from short calibration runs; as text or as JSON.
+//! `studyrun GRID --dry-run`: the case table, the memory estimate, and the file size
+//! and time estimated from a few cases run whole; as text or as JSON.
 
 use super::*;
+use studyrun::run::{measure_case, Measured};
 
 /// Cases the dry run's time estimate is calibrated on: up to [`CALIBRATION_CASES`]
 /// spread evenly over `rows`, bearing cases only when there are any (an ideal case
@@ -41,24 +42,43 @@ struct DryRun<'a> {
     spectra: usize,
     /// The output's size before compression (bytes).
     raw_bytes: f64,
+    /// Bytes per case of the file beside its series and spectra (its metrics,
+    /// parameters and status), and of the file beside its cases (references'
+    /// series, coordinates, metadata), uncompressed.
+    overhead: (f64, f64),
     /// The run's peak memory (bytes) and its breakdown in words.
     memory: (f64, String),
-    /// The calibration: `(case id, estimated seconds for the whole case)` of the runs
-    /// that finished, and the messages of those that failed.
-    calibration: (Vec<(u64, f64)>, Vec<String>),
+    /// The calibration: the cases run whole, and the messages of those that failed.
+    calibration: (Vec<Measured>, Vec<String>),
 }
 
 impl DryRun<'_> {
-    /// The mean cost of one case (s) over the calibration runs, if any finished.
-    fn per_case(&self) -> Option<f64> {
-        let times = &self.calibration.0;
-        (!times.is_empty()).then(|| times.iter().map(|t| t.1).sum::<f64>() / times.len() as f64)
+    /// The mean of `f` over the calibration runs, if any finished.
+    fn mean(&self, f: impl Fn(&Measured) -> f64) -> Option<f64> {
+        let runs = &self.calibration.0;
+        (!runs.is_empty()).then(|| runs.iter().map(f).sum::<f64>() / runs.len() as f64)
     }
 
-    /// The whole run's estimated wall time on `jobs` workers (s).
+    /// The mean CPU time of one case (s) over the calibration runs.
+    fn per_case(&self) -> Option<f64> {
+        self.mean(|m| m.case_s)
+    }
+
+    /// The whole run's estimated wall time on `jobs` workers (s): every case, and
+    /// every reference twice (made when the file is created, and again by the
+    /// workers, whose cache of them is bounded).
     fn total(&self, jobs: usize) -> Option<f64> {
-        self.per_case()
-            .map(|c| c * self.rows.len() as f64 / jobs as f64)
+        let reference = self.mean(|m| m.reference_s)?;
+        let cpu = self.per_case()? * self.rows.len() as f64
+            + 2.0 * reference * self.study.references.len() as f64;
+        Some(cpu / jobs.max(1) as f64)
+    }
+
+    /// The file's estimated size (bytes): each case's series and spectra as the
+    /// calibration runs stored them (compressed), plus the overheads.
+    fn file_bytes(&self) -> Option<f64> {
+        let stored = self.mean(|m| m.stored_bytes as f64)?;
+        Some(self.rows.len() as f64 * (stored + self.overhead.0) + self.overhead.1)
     }
 }
 
@@ -85,12 +105,17 @@ pub(super) fn dry_run(
         * width;
     let estimate = study.memory_estimate(limits.jobs);
     let calibration = calibrate(study, &rows);
+    let layout = studyrun::study::study_layout(study, &rows[..rows.len().min(1)], shard);
+    let per_case = 8.0 * (layout.n_metric_values() + layout.parameters.len()) as f64 + 64.0;
+    let references =
+        width * (layout.reference_series.len() * n_time) as f64 * study.references.len() as f64;
     let dry = DryRun {
         study,
         rows,
         series: (n_series, n_time),
         spectra: study.stored_spectra_count(),
         raw_bytes,
+        overhead: (per_case, references + FILE_METADATA_BYTES),
         memory: (estimate.total, estimate.to_string()),
         calibration,
     };
@@ -101,23 +126,33 @@ pub(super) fn dry_run(
     }
 }
 
-/// Runs 10 % of the duration of the cases [`calibration_rows`] picks: each finished
-/// run's case id and its time scaled to the whole duration (s), and why the others
+/// Bytes of a study file beside its variables' values: the root and variable
+/// attributes, dimension scales, chunk indices and HDF5's own structures (about what
+/// a one-case file of the smoke study holds beside its values).
+const FILE_METADATA_BYTES: f64 = 120e3;
+
+/// CPU time after which the calibration runs no further case (s): a dry run stays
+/// quick however long a case is, and still runs at least one.
+const CALIBRATION_BUDGET_S: f64 = 3.0;
+
+/// Runs whole, as a worker does ([`measure_case`]), the cases [`calibration_rows`]
+/// picks, until [`CALIBRATION_BUDGET_S`] is spent: what each cost, and why the others
 /// failed.
-fn calibrate(study: &Study, rows: &[usize]) -> (Vec<(u64, f64)>, Vec<String>) {
-    let short = Sampling {
-        duration: 0.1 * study.sampling.duration,
-        ..study.sampling
-    };
-    let (mut times, mut failures) = (Vec::new(), Vec::new());
+fn calibrate(study: &Study, rows: &[usize]) -> (Vec<Measured>, Vec<String>) {
+    let (mut runs, mut failures) = (Vec::new(), Vec::new());
+    let mut spent = 0.0;
     for &r in &calibration_rows(study, rows) {
-        let case = &study.cases[r];
-        match simulate(&case.params, &study.solver, &short) {
-            Ok(o) => times.push((case.id, o.wall_time * 10.0)),
-            Err(e) => failures.push(format!("case {}: {e}", case.id)),
+        if spent > CALIBRATION_BUDGET_S {
+            break;
         }
+        let start = std::time::Instant::now();
+        match measure_case(study, r) {
+            Ok(m) => runs.push(m),
+            Err(e) => failures.push(format!("case {}: {e}", study.cases[r].id)),
+        }
+        spent += start.elapsed().as_secs_f64();
     }
-    (times, failures)
+    (runs, failures)
 }
 
 /// The dry run as one JSON object (docs/cli.md).
@@ -146,11 +181,12 @@ fn print_json(dry: &DryRun<'_>, limits: &Limits) -> Result<()> {
         "decimate": study.output.decimate,
         "spectra": dry.spectra,
         "raw_bytes": dry.raw_bytes.round(),
+        "file_bytes": dry.file_bytes().map(f64::round),
         "memory": super::study_run::memory_json(dry.memory.0, limits),
         "time": {
             "estimate_s": dry.total(limits.jobs),
             "per_case_s": dry.per_case(),
-            "calibrated_on": dry.calibration.0.iter().map(|t| t.0).collect::<Vec<_>>(),
+            "calibrated_on": dry.calibration.0.iter().map(|m| m.id).collect::<Vec<_>>(),
             "failures": dry.calibration.1,
         },
     });
@@ -172,7 +208,7 @@ fn print_text(dry: &DryRun<'_>, limits: &Limits) -> Result<()> {
     }
     out!(
         "\n{} cases ({} ideal references); {} stored series x {} samples (output.decimate {}) \
-         and {} spectra per case; raw output {:.1} MB before compression (deflate level {}, {})",
+         and {} spectra per case; raw output {:.1} MB before compression (deflate level {}, {}){}",
         dry.rows.len(),
         study.references.len(),
         dry.series.0,
@@ -182,6 +218,10 @@ fn print_text(dry: &DryRun<'_>, limits: &Limits) -> Result<()> {
         dry.raw_bytes / 1e6,
         study.compression,
         if study.float32 { "float32" } else { "float64" },
+        dry.file_bytes().map_or(String::new(), |b| format!(
+            "; the file about {:.1} MB",
+            b / 1e6
+        )),
     )?;
     out!(
         "memory: about {} of the limit {}: {}",
@@ -208,9 +248,9 @@ fn print_time(dry: &DryRun<'_>, jobs: usize) -> Result<()> {
             }
         );
     };
-    let ids: Vec<String> = times.iter().map(|t| t.0.to_string()).collect();
+    let ids: Vec<String> = times.iter().map(|m| m.id.to_string()).collect();
     out!(
-        "time: about {} s on {jobs} threads (a case takes {:.3} s on average over cases {}, from runs of 10 % of the duration{})",
+        "time: about {} s on {jobs} threads (a case takes {:.3} s of CPU on average over cases {}, run whole{})",
         if total < 10.0 {
             format!("{total:.1}")
         } else {

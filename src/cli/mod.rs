@@ -10,7 +10,7 @@ use clap::{Args, CommandFactory, Parser, Subcommand};
 
 use studyrun::numeric::simd::Isa;
 use studyrun::output;
-use studyrun::simulate::{simulate, Sampling, CHANNELS};
+use studyrun::simulate::CHANNELS;
 use studyrun::study::memory::{self, Limits};
 use studyrun::study::params::axis_value;
 use studyrun::study::Shard;

@@ -12,6 +12,7 @@
 //! ([`DataFile`]). Case data do not depend on the number of threads: each case is simulated
 //! and encoded on its own, in one thread. [`RunStats`] says where the time went.
 
+mod calibrate;
 mod case;
 mod error;
 mod journal;
@@ -20,6 +21,7 @@ mod progress;
 mod references;
 mod stats;
 
+pub use calibrate::{measure_case, Measured};
 pub use case::check_eccentricity;
 use case::run_case;
 pub use error::RunError;
