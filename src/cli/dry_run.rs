@@ -64,14 +64,19 @@ impl DryRun<'_> {
         self.mean(|m| m.case_s)
     }
 
-    /// The whole run's estimated wall time on `jobs` workers (s): every case, and
-    /// every reference twice (made when the file is created, and again by the
-    /// workers, whose cache of them is bounded).
+    /// The whole run's estimated wall time on `jobs` workers (s): the start
+    /// ([`STARTUP_S`]); every case, and every reference twice (made when the file is
+    /// created, and again by the workers, whose cache of them is bounded), shared by
+    /// the workers; the last case, which one worker finishes alone; and the file's
+    /// flush to the disk at the end ([`FLUSH_BYTES_PER_S`]).
     fn total(&self, jobs: usize) -> Option<f64> {
+        let jobs = jobs.max(1) as f64;
+        let per_case = self.per_case()?;
         let reference = self.mean(|m| m.reference_s)?;
-        let cpu = self.per_case()? * self.rows.len() as f64
+        let cpu = per_case * self.rows.len() as f64
             + 2.0 * reference * self.study.references.len() as f64;
-        Some(cpu / jobs.max(1) as f64)
+        let tail = per_case * (1.0 - 1.0 / jobs);
+        Some(STARTUP_S + cpu / jobs + tail + self.file_bytes()? / FLUSH_BYTES_PER_S)
     }
 
     /// The file's estimated size (bytes): each case's series and spectra as the
@@ -130,6 +135,15 @@ pub(super) fn dry_run(
 /// attributes, dimension scales, chunk indices and HDF5's own structures (about what
 /// a one-case file of the smoke study holds beside its values).
 const FILE_METADATA_BYTES: f64 = 120e3;
+
+/// Seconds a run takes beside its cases: the process's start, the grid's expansion
+/// and the file's creation (about what `--timings` shows before the workers start on a
+/// small study).
+const STARTUP_S: f64 = 0.05;
+
+/// Bytes per second at which the finished file reaches the disk (its `fsync`; about
+/// what docs/performance.md measures).
+const FLUSH_BYTES_PER_S: f64 = 1e9;
 
 /// CPU time after which the calibration runs no further case (s): a dry run stays
 /// quick however long a case is, and still runs at least one.
