@@ -345,13 +345,14 @@ def order_spectra(ds, channel, cases, out, max_order=None, dpi=90):
 
 def spectral_kurtosis(ds, channel, cases, out, f_max=None, dpi=90):
     """The stored spectral kurtosis `<channel>_spectral_kurtosis` (docs/model.md §7.5,
-    dimensionless, 0 for Gaussian noise) against frequency, one panel per
-    {label: case}, up to `f_max` (Hz; default the end of the file's frequency axis),
+    dimensionless, 0 for Gaussian noise) against its own frequency axis (the STFT bins,
+    `sk_frequency`), one panel per {label: case}, up to `f_max` (Hz; default the end of
+    that axis),
     with the band the file records for the case (`<channel>_envelope_band_low/_high`)
     shaded: where the impacts ring, the kurtosis stands out."""
     name = f"{channel}_spectral_kurtosis"
     _need(ds, name, f"{channel}_envelope_band_low")
-    freq = ds["frequency"].values
+    freq = ds[ds[name].dims[1]].values
     top = f_max or float(freq[-1])
     keep = (freq >= 0) & (freq <= top)
     fig, axes = _panels(len(cases))

@@ -565,6 +565,8 @@ pub fn write_file(
         revolution_metrics: Vec::new(),
         orders: Vec::new(),
         order_spectra: Vec::new(),
+        sk_frequencies: Vec::new(),
+        kurtosis: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
         reference_index: vec![0; ms.len()],

@@ -36,9 +36,12 @@ fn without_envelope_nothing_is_stored_and_the_rest_is_bit_identical() {
     }
     assert!(plain.attribute("envelope_band").is_none());
     assert!(with.attribute("envelope_band").is_some());
-    // The envelope file adds 2 spectra and 15 metrics per channel, 4 frequencies
-    // and their 4 orders; no order spectra unless asked.
-    assert_eq!(lw.spectra.len(), lp.spectra.len() + 4);
+    // The envelope file adds an envelope spectrum, a spectral kurtosis (on its own
+    // `sk_frequency` axis) and 15 metrics per channel, 4 frequencies and their 4
+    // orders; no order spectra unless asked.
+    assert_eq!(lw.spectra.len(), lp.spectra.len() + 2);
+    assert_eq!(lw.kurtosis.len(), 2);
+    assert!(lp.kurtosis.is_empty() && lp.sk_frequencies.is_empty());
     assert_eq!(lw.metrics.len(), lp.metrics.len() + 2 * 15 + 8);
     assert!(lw.orders.is_empty() && lw.order_spectra.is_empty());
     assert_eq!(lw.spectra[..lp.spectra.len()], lp.spectra[..]);

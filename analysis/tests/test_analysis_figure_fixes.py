@@ -107,7 +107,10 @@ def cases_at(ds, keep):
 def test_spectral_kurtosis_figure_draws_the_stored_values(diagnosis, drawn, tmp_path):
     cases = cases_at(diagnosis, lambda rpm: rpm == 600.0)
     dfig.spectral_kurtosis(diagnosis, "accelerometer", cases, tmp_path / "sk.png", dpi=40)
-    freq = diagnosis["frequency"].values
+    # On its own frequencies: the STFT bins of `stft_segment` samples.
+    freq = diagnosis["sk_frequency"].values
+    assert diagnosis["accelerometer_spectral_kurtosis"].dims == ("case", "sk_frequency")
+    assert len(freq) == int(diagnosis.attrs["stft_segment"]) // 2 + 1
     for ax, (label, case) in zip(drawn[-1].axes, cases.items()):
         x, y = ax.lines[0].get_data()
         np.testing.assert_array_equal(x, freq)

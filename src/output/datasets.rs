@@ -13,6 +13,7 @@ use super::layout::{
 pub(super) struct RowDatasets {
     pub(super) series: Vec<Dataset>,
     pub(super) spectra: Vec<Dataset>,
+    pub(super) kurtosis: Vec<Dataset>,
     pub(super) metrics: Vec<Dataset>,
     pub(super) replicate_metrics: Vec<Dataset>,
     pub(super) revolution_metrics: Vec<Dataset>,
@@ -34,6 +35,7 @@ impl RowDatasets {
         Ok(Self {
             series: all(&layout.series)?,
             spectra: all(&layout.spectra)?,
+            kurtosis: all(&layout.kurtosis)?,
             metrics: all(&layout.metrics)?,
             replicate_metrics: all(&layout.replicate_metrics)?,
             revolution_metrics: all(&layout.revolution_metrics)?,

@@ -50,6 +50,9 @@ pub const REVOLUTION: &str = "revolution";
 /// Name of the order dimension and its coordinate variable (f64, cycles per crank
 /// revolution), present only in a file with [`Layout::order_spectra`].
 pub const ORDER: &str = "order";
+/// Name of the dimension of the spectral kurtosis and its coordinate variable (f64,
+/// Hz: the STFT bins), present only in a file with [`Layout::kurtosis`].
+pub const SK_FREQUENCY: &str = "sk_frequency";
 /// Built-in variable `[case]` i8: the [`Status`] code of each case.
 pub const STATUS: &str = "status";
 /// Built-in variable `[case]` string: why a case failed (empty otherwise).
@@ -72,7 +75,7 @@ pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
 pub(super) const FORMAT_VERSION: i64 = 1;
 
 /// The names no caller variable may take.
-const RESERVED: [&str; 12] = [
+const RESERVED: [&str; 13] = [
     CASE,
     TIME,
     FREQUENCY,
@@ -80,6 +83,7 @@ const RESERVED: [&str; 12] = [
     REPLICATE,
     REVOLUTION,
     ORDER,
+    SK_FREQUENCY,
     STATUS,
     ERROR_MESSAGE,
     REPLICATE_STATUS,
@@ -204,12 +208,13 @@ pub(super) enum Role {
     OrderSpectrum,
     Series,
     Spectrum,
+    SpectralKurtosis,
     ReferenceParameter,
     ReferenceSeries,
 }
 
 impl Role {
-    const ALL: [Self; 9] = [
+    const ALL: [Self; 10] = [
         Self::Parameter,
         Self::Metric,
         Self::ReplicateMetric,
@@ -217,6 +222,7 @@ impl Role {
         Self::OrderSpectrum,
         Self::Series,
         Self::Spectrum,
+        Self::SpectralKurtosis,
         Self::ReferenceParameter,
         Self::ReferenceSeries,
     ];
@@ -231,6 +237,7 @@ impl Role {
             Self::OrderSpectrum => "order_spectrum",
             Self::Series => "series",
             Self::Spectrum => "spectrum",
+            Self::SpectralKurtosis => "spectral_kurtosis",
             Self::ReferenceParameter => "reference_parameter",
             Self::ReferenceSeries => "reference_series",
         }
@@ -284,6 +291,12 @@ pub struct Layout {
     /// Per-case order spectra `[case, order]`, float64, held and written whole like
     /// the per-revolution results; none without `orders`.
     pub order_spectra: Vec<VarSpec>,
+    /// Bin frequencies of the spectral kurtosis (the `sk_frequency` coordinate, Hz);
+    /// empty when the file has none.
+    pub sk_frequencies: Vec<f64>,
+    /// Per-case spectral kurtoses `[case, sk_frequency]`, stored like the spectra (a
+    /// row per chunk); a record's spectrum rows end with them.
+    pub kurtosis: Vec<VarSpec>,
     /// Per-case inputs `[case]`, written at creation.
     pub parameters: Vec<Param>,
     /// Per-reference inputs `[reference]`, written at creation.
@@ -394,6 +407,15 @@ impl Layout {
             + self.order_spectra.len() * self.orders.len()
     }
 
+    /// The spectrum-like rows of a case record ([`Record::spectra`](super::Record::spectra)),
+    /// each with its length: every [`Layout::spectra`] entry over `frequencies`, then
+    /// every [`Layout::kurtosis`] entry over `sk_frequencies`.
+    pub fn spectrum_rows(&self) -> impl Iterator<Item = (&VarSpec, usize)> {
+        let (n_f, n_sk) = (self.frequencies.len(), self.sk_frequencies.len());
+        (self.spectra.iter().map(move |s| (s, n_f)))
+            .chain(self.kurtosis.iter().map(move |s| (s, n_sk)))
+    }
+
     /// Checks the layout; the error says what is wrong and names the variable.
     pub fn validate(&self) -> Result<(), String> {
         let n_case = self.case_ids.len();
@@ -431,6 +453,11 @@ impl Layout {
                 !self.series.is_empty() || !self.reference_series.is_empty(),
             ),
             (FREQUENCY, self.frequencies.len(), !self.spectra.is_empty()),
+            (
+                SK_FREQUENCY,
+                self.sk_frequencies.len(),
+                !self.kurtosis.is_empty(),
+            ),
         ];
         for (dim, len, needed) in needs {
             if needed && len == 0 {
@@ -501,6 +528,7 @@ impl Layout {
             .chain(&self.order_spectra)
             .chain(&self.series)
             .chain(&self.spectra)
+            .chain(&self.kurtosis)
             .chain(self.reference_parameters.iter().map(|p| &p.spec))
             .chain(&self.reference_series)
     }
@@ -595,6 +623,8 @@ mod tests {
             revolution_metrics: vec![],
             orders: vec![],
             order_spectra: vec![],
+            sk_frequencies: Vec::new(),
+            kurtosis: Vec::new(),
             parameters: vec![Param {
                 spec: VarSpec::new("rpm", "min-1", "crank speed"),
                 values: ParamValues::F64(vec![300.0, 600.0]),

@@ -60,6 +60,7 @@ fn layout_difference(l: &Layout, first: &Layout) -> Option<String> {
         ("replicate", l.replicates != first.replicates),
         ("revolution", l.revolutions != first.revolutions),
         ("order", l.orders != first.orders),
+        ("sk_frequency", l.sk_frequencies != first.sk_frequencies),
         ("reference", l.reference_ids != first.reference_ids),
     ];
     if let Some((name, _)) = coordinates.iter().find(|(_, differs)| *differs) {
@@ -67,6 +68,7 @@ fn layout_difference(l: &Layout, first: &Layout) -> Option<String> {
     }
     variables_difference(&l.series, &first.series)
         .or_else(|| variables_difference(&l.spectra, &first.spectra))
+        .or_else(|| variables_difference(&l.kurtosis, &first.kurtosis))
         .or_else(|| variables_difference(&l.metrics, &first.metrics))
         .or_else(|| variables_difference(&l.replicate_metrics, &first.replicate_metrics))
         .or_else(|| variables_difference(&l.revolution_metrics, &first.revolution_metrics))
@@ -289,7 +291,14 @@ fn shard_orders(readers: &[StudyReader]) -> Vec<Order> {
             let (want, have): (Vec<VarSpec>, Vec<VarSpec>) = (specs(first), specs(l));
             Order {
                 series: positions(&first.series, &l.series),
-                spectra: positions(&first.spectra, &l.spectra),
+                spectra: positions(&first.spectra, &l.spectra)
+                    .into_iter()
+                    .chain(
+                        positions(&first.kurtosis, &l.kurtosis)
+                            .into_iter()
+                            .map(|i| l.spectra.len() + i),
+                    )
+                    .collect(),
                 metrics: positions(&first.metrics, &l.metrics),
                 replicate_metrics: positions(&first.replicate_metrics, &l.replicate_metrics),
                 revolution_metrics: positions(&first.revolution_metrics, &l.revolution_metrics),

@@ -13,7 +13,7 @@ use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REPLICATE_STATUS,
-    REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
+    REVOLUTION, ROLE_ATTR, SK_FREQUENCY, STATUS, TIME, TIME_UNITS,
 };
 use super::text::{self, Strings};
 use crate::signal::DESCRIPTIVE_ATTRIBUTES;
@@ -25,7 +25,8 @@ use crate::simulate::sample_time;
 pub struct CaseData {
     /// One vector per [`Layout::series`], `times.len()` values each.
     pub series: Vec<Vec<f64>>,
-    /// One vector per [`Layout::spectra`], `frequencies.len()` values each.
+    /// One vector per [`Layout::spectra`], `frequencies.len()` values each, then one
+    /// per [`Layout::kurtosis`], `sk_frequencies.len()` values each.
     pub spectra: Vec<Vec<f64>>,
     /// One value per [`Layout::metrics`], then one per replicate for each of
     /// [`Layout::replicate_metrics`] and one per revolution for each of
@@ -206,7 +207,8 @@ impl StudyReader {
     pub fn read_case(&self, row: usize) -> Result<CaseData, StudyFileError> {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
         let series = self.read_rows(&self.rows.series, &self.layout.series, row)?;
-        let spectra = self.read_rows(&self.rows.spectra, &self.layout.spectra, row)?;
+        let mut spectra = self.read_rows(&self.rows.spectra, &self.layout.spectra, row)?;
+        spectra.extend(self.read_rows(&self.rows.kurtosis, &self.layout.kurtosis, row)?);
         let mut metrics: Vec<f64> = self
             .rows
             .metrics
@@ -468,6 +470,11 @@ fn coordinates(file: &File, path: &Path) -> Result<Layout, StudyFileError> {
             Ok(ds) => read_floats(&ds, path, ORDER)?,
             Err(_) => Vec::new(),
         },
+        sk_frequencies: match file.dataset(SK_FREQUENCY) {
+            Ok(ds) => read_floats(&ds, path, SK_FREQUENCY)?,
+            Err(_) => Vec::new(),
+        },
+        kurtosis: Vec::new(),
         order_spectra: Vec::new(),
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
@@ -516,6 +523,7 @@ fn read_variables(file: &File, path: &Path, layout: &mut Layout) -> Result<(), S
             Role::OrderSpectrum => (layout.n_cases(), Some(layout.orders.len())),
             Role::Series => (layout.n_cases(), Some(layout.times.len())),
             Role::Spectrum => (layout.n_cases(), Some(layout.frequencies.len())),
+            Role::SpectralKurtosis => (layout.n_cases(), Some(layout.sk_frequencies.len())),
             Role::ReferenceParameter => (layout.n_references(), None),
             Role::ReferenceSeries => (layout.n_references(), Some(layout.times.len())),
         };
@@ -537,6 +545,7 @@ fn read_variables(file: &File, path: &Path, layout: &mut Layout) -> Result<(), S
             Role::OrderSpectrum => layout.order_spectra.push(spec),
             Role::Series => layout.series.push(spec),
             Role::Spectrum => layout.spectra.push(spec),
+            Role::SpectralKurtosis => layout.kurtosis.push(spec),
             Role::ReferenceSeries => layout.reference_series.push(spec),
         }
         let written_whole = matches!(

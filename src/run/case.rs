@@ -105,10 +105,7 @@ pub(crate) fn run_case(
         Ok(a) => a,
         Err(e) => return failed(e.to_string(), cost),
     };
-    // The file keeps the bins up to `spectra.max_frequency`; the metrics used them all.
-    spectra
-        .iter_mut()
-        .for_each(|s| s.truncate(study.stored_bins()));
+    keep_stored_bins(study, &mut spectra);
     // The per-revolution metrics reread the samples already analysed (docs/model.md §6.1).
     let per_revolution = (study.revolutions > 0).then(|| {
         let windows = revolution_windows(&params.drive(), &study.sampling, study.transient);
@@ -137,6 +134,15 @@ pub(crate) fn run_case(
         metrics,
         replicate_messages,
         cost,
+    }
+}
+
+/// Cuts the spectra over `frequency` to the bins the file keeps
+/// (`spectra.max_frequency`, [`Study::stored_bins`]); the spectral kurtoses after them,
+/// on their own frequencies, stay whole. The metrics were computed from every bin.
+fn keep_stored_bins(study: &Study, spectra: &mut [Vec<f64>]) {
+    for s in spectra.iter_mut().take(study.stored_spectra_count()) {
+        s.truncate(study.stored_bins());
     }
 }
 

@@ -74,9 +74,9 @@ pub struct JournalHeader {
     pub n_time: u64,
     /// Number of series per case.
     pub n_series: u64,
-    /// Bins per spectrum.
+    /// Bins of the longest spectrum-like row (spectra and spectral kurtoses).
     pub n_freq: u64,
-    /// Number of spectra per case.
+    /// Number of spectrum-like rows per case (spectra and spectral kurtoses).
     pub n_spectra: u64,
     /// Number of metrics per case.
     pub n_metrics: u64,

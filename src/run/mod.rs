@@ -214,8 +214,8 @@ fn journal_header(study: &Study, shard: Option<Shard>, layout: &Layout) -> Journ
         fingerprint: StudyFingerprint::of(study, shard).0,
         n_time: layout.times.len() as u64,
         n_series: layout.series.len() as u64,
-        n_freq: layout.frequencies.len() as u64,
-        n_spectra: layout.spectra.len() as u64,
+        n_freq: layout.spectrum_rows().map(|(_, n)| n).max().unwrap_or(0) as u64,
+        n_spectra: layout.spectrum_rows().count() as u64,
         n_metrics: layout.n_metric_values() as u64,
         storage: layout.storage,
     }
@@ -497,7 +497,7 @@ impl Tally {
         if rec.status() == Status::Ok {
             self.ok += 1;
             let values = layout.series.len() * layout.times.len()
-                + layout.spectra.len() * layout.frequencies.len();
+                + layout.spectrum_rows().map(|(_, n)| n).sum::<usize>();
             self.stats.raw_bytes += 8 * values as u64;
         } else {
             self.failed += 1

@@ -79,6 +79,16 @@ pub fn stft_segment(n: usize) -> usize {
     1 << (usize::BITS - 1 - target.leading_zeros())
 }
 
+/// The frequencies of the spectral kurtosis of a window of `n` samples at
+/// `sample_rate` (Hz): the bins `k f_s / L`, `k = 0..=L/2`, of its STFT segment length
+/// `L` = [`stft_segment`] (none for an empty window).
+pub fn sk_frequencies(n: usize, sample_rate: f64) -> Vec<f64> {
+    if n == 0 {
+        return Vec::new();
+    }
+    frequencies(stft_segment(n), sample_rate)
+}
+
 /// The deepest binary level `K` of the fast kurtogram of `n` samples: the largest
 /// `K ≤` [`KURTOGRAM_MAX_LEVEL`] whose bands hold at least 16 bins, `n / 2^(K+1) ≥ 16`
 /// (0 when even the whole band holds fewer).
@@ -139,7 +149,8 @@ pub struct ChannelEnvelope {
     /// One-sided amplitude spectrum of the squared envelope (`n/2 + 1` bins, the
     /// channel's units squared).
     pub spectrum: Vec<f64>,
-    /// Spectral kurtosis at each bin frequency (`n/2 + 1` values, dimensionless).
+    /// Spectral kurtosis at each STFT bin frequency ([`sk_frequencies`]: `L/2 + 1`
+    /// values for the segment length `L`, dimensionless).
     pub spectral_kurtosis: Vec<f64>,
 }
 
@@ -157,6 +168,11 @@ pub struct EnvelopePlan {
     bands: Vec<(f64, Band)>,
     /// Periodic Hann weights of one STFT segment.
     segment_weights: Vec<f64>,
+    /// The FFT of one STFT segment at its own length, its input, output and scratch.
+    segment_forward: Arc<dyn RealToComplex<f64>>,
+    segment_real: Vec<f64>,
+    segment_spectrum: Vec<Complex<f64>>,
+    segment_scratch: Vec<Complex<f64>>,
     centred: Vec<f64>,
     real: Vec<f64>,
     spectrum: Vec<Complex<f64>>,
@@ -184,11 +200,16 @@ impl EnvelopePlan {
         let mut planner = FftPlanner::<f64>::new();
         let inverse = planner.plan_fft_inverse(n);
         let segment = stft_segment(n);
+        let segment_forward = RealFftPlanner::<f64>::new().plan_fft_forward(segment);
         Ok(Self {
             sample_rate,
             freqs: frequencies(n, sample_rate),
             bands: kurtogram_bands(sample_rate, kurtogram_depth(n)),
             segment_weights: Window::Hann.weights(segment),
+            segment_real: segment_forward.make_input_vec(),
+            segment_spectrum: segment_forward.make_output_vec(),
+            segment_scratch: segment_forward.make_scratch_vec(),
+            segment_forward,
             centred: vec![0.0; n],
             real: forward.make_input_vec(),
             spectrum: forward.make_output_vec(),
@@ -235,7 +256,7 @@ impl EnvelopePlan {
         };
         let mut spectrum = vec![0.0; self.freqs.len()];
         self.squared_envelope_spectrum(band, &mut spectrum)?;
-        let mut spectral_kurtosis = vec![0.0; self.freqs.len()];
+        let mut spectral_kurtosis = vec![0.0; self.segment_spectrum.len()];
         self.spectral_kurtosis(&mut spectral_kurtosis)?;
         Ok(ChannelEnvelope {
             band,
@@ -391,8 +412,9 @@ impl EnvelopePlan {
 
     /// The spectral kurtosis of the loaded samples (docs/model.md §7.5): segments of
     /// `L` = [`stft_segment`] samples of the centred window, hop `L/2`, each times a
-    /// periodic Hann window and zero-padded to `n`; with `M` segments and `X_{m,k}`
-    /// their FFTs, `SK_k = M Σ_m |X_{m,k}|⁴ / (Σ_m |X_{m,k}|²)² − 2`.
+    /// periodic Hann window and transformed at its own length; with `M` segments and
+    /// `X_{m,k}` their FFTs (`k = 0..=L/2`, bin `k` at `k f_s / L`,
+    /// [`sk_frequencies`]), `SK_k = M Σ_m |X_{m,k}|⁴ / (Σ_m |X_{m,k}|²)² − 2`.
     fn spectral_kurtosis(&mut self, out: &mut [f64]) -> Result<(), SpectrumError> {
         let n = self.centred.len();
         let segment = self.segment_weights.len();
@@ -402,18 +424,26 @@ impl EnvelopePlan {
         let mut sum4 = vec![0.0; out.len()];
         for m in 0..count {
             let start = m * hop;
-            self.real.fill(0.0);
-            for ((r, &y), &w) in self.real[..segment]
+            for ((r, &y), &w) in self
+                .segment_real
                 .iter_mut()
                 .zip(&self.centred[start..start + segment])
                 .zip(&self.segment_weights)
             {
                 *r = w * y;
             }
-            self.forward
-                .process_with_scratch(&mut self.real, &mut self.spectrum, &mut self.real_scratch)
+            self.segment_forward
+                .process_with_scratch(
+                    &mut self.segment_real,
+                    &mut self.segment_spectrum,
+                    &mut self.segment_scratch,
+                )
                 .map_err(|e| SpectrumError::Fft(e.to_string()))?;
-            for ((s2, s4), x) in sum2.iter_mut().zip(sum4.iter_mut()).zip(&self.spectrum) {
+            for ((s2, s4), x) in sum2
+                .iter_mut()
+                .zip(sum4.iter_mut())
+                .zip(&self.segment_spectrum)
+            {
                 let p = x.norm_sqr();
                 *s2 += p;
                 *s4 += p * p;
@@ -523,16 +553,18 @@ pub(crate) mod tests {
     #[test]
     fn spectral_kurtosis_of_noise_and_of_a_tone() {
         // Gaussian noise: SK ≈ 0 in every bin away from DC and Nyquist (where X is
-        // nearly real and SK tends to 1: within two STFT bins, 2n/L file bins). With
+        // nearly real and SK tends to 1: the two STFT bins at each end). With
         // n = 2^16, L = 256 and hop 128, M = 511 half-overlapping segments, so one
         // STFT bin's SK scatters by about 2/√M ≈ 0.09; the mean over the inner bins
-        // (128 independent STFT bins) is within 0.03 of 0.
+        // (125 STFT bins) is within 0.03 of 0.
         let n = 1 << 16;
         let x = gaussian(n, 7);
         let mut plan = EnvelopePlan::new(n, 1.0).unwrap();
         let env = plan.analyse(&x, BandChoice::Auto).unwrap();
-        let edge = 2 * n / stft_segment(n);
-        let inner = &env.spectral_kurtosis[edge..n / 2 - edge];
+        let segment = stft_segment(n);
+        assert_eq!(env.spectral_kurtosis.len(), segment / 2 + 1);
+        assert_eq!(sk_frequencies(n, 1.0), frequencies(segment, 1.0));
+        let inner = &env.spectral_kurtosis[2..segment / 2 - 1];
         let mean = inner.iter().sum::<f64>() / inner.len() as f64;
         assert!(mean.abs() < 0.03, "mean SK of noise {mean}");
         let worst = inner.iter().fold(0.0f64, |a, s| a.max(s.abs()));
@@ -542,8 +574,9 @@ pub(crate) mod tests {
         let f0 = 0.1234;
         let tone: Vec<f64> = (0..n).map(|j| (TAU * f0 * j as f64 + 0.3).cos()).collect();
         let env = plan.analyse(&tone, BandChoice::Auto).unwrap();
-        let k0 = (f0 * n as f64).round() as usize;
-        for k in k0 - 100..=k0 + 100 {
+        // Its STFT bin and the two beside it, within the Hann main lobe.
+        let k0 = (f0 * segment as f64).round() as usize;
+        for k in k0 - 1..=k0 + 1 {
             let sk = env.spectral_kurtosis[k];
             assert!((sk + 1.0).abs() < 1e-6, "bin {k}: SK of a tone {sk}");
         }

@@ -197,15 +197,14 @@ pub fn envelope_metric_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
     specs
 }
 
-/// The per-case spectrum variables `envelope:` adds, after the study's spectra, for an
-/// analysed window of `n` samples: per channel its envelope spectrum, then its
-/// spectral kurtosis, each saying how it was made (window, normalisation, band, STFT).
-pub fn envelope_spectrum_specs(settings: &EnvelopeSettings, n: usize) -> Vec<VarSpec> {
-    let mut specs = Vec::new();
-    let segment = envelope::stft_segment(n);
-    for c in &settings.channels {
-        let ch = &c.name;
-        specs.extend([
+/// The per-case spectrum variables `envelope:` adds, after the study's spectra: per
+/// channel its envelope spectrum, saying how it was made (window, normalisation, band).
+pub fn envelope_spectrum_specs(settings: &EnvelopeSettings) -> Vec<VarSpec> {
+    settings
+        .channels
+        .iter()
+        .map(|c| {
+            let ch = &c.name;
             VarSpec::new(
                 format!("{ch}_envelope_spectrum"),
                 units_power(c.units, 2),
@@ -213,7 +212,21 @@ pub fn envelope_spectrum_specs(settings: &EnvelopeSettings, n: usize) -> Vec<Var
             )
             .with("window", HANN)
             .with("normalisation", spectrum::AMPLITUDE_NORMALISATION)
-            .with("band", settings.band.describe()),
+            .with("band", settings.band.describe())
+        })
+        .collect()
+}
+
+/// The spectral kurtosis variables `envelope:` adds, one per channel, over the STFT
+/// bins of an analysed window of `n` samples ([`envelope::sk_frequencies`]), saying
+/// how they were made (window, normalisation, segment and hop).
+pub fn spectral_kurtosis_specs(settings: &EnvelopeSettings, n: usize) -> Vec<VarSpec> {
+    let segment = envelope::stft_segment(n);
+    settings
+        .channels
+        .iter()
+        .map(|c| {
+            let ch = &c.name;
             VarSpec::new(
                 format!("{ch}_spectral_kurtosis"),
                 "1",
@@ -222,10 +235,9 @@ pub fn envelope_spectrum_specs(settings: &EnvelopeSettings, n: usize) -> Vec<Var
             .with("window", HANN)
             .with("normalisation", SK_NORMALISATION)
             .with("stft_segment", segment as i64)
-            .with("stft_hop", (segment / 2) as i64),
-        ]);
-    }
-    specs
+            .with("stft_hop", (segment / 2) as i64)
+        })
+        .collect()
 }
 
 /// The window of the envelope, spectral-kurtosis and order spectra, whatever
@@ -345,8 +357,8 @@ impl EnvelopeAnalysis {
         })
     }
 
-    /// Appends the envelope spectra and spectral kurtoses of the channels (in `out`
-    /// or `sensors`, the case's sensor series) over `window` to `spectra` and their
+    /// Appends the envelope spectra of the channels (in `out` or `sensors`, the case's
+    /// sensor series) over `window`, then their spectral kurtoses, to `spectra` and their
     /// metrics ([`envelope_metric_specs`] order) to `metrics`; with `squared`, also
     /// each channel's squared envelope (mean removed, docs/model.md §7.4) to it.
     #[allow(clippy::too_many_arguments)]
@@ -362,6 +374,7 @@ impl EnvelopeAnalysis {
     ) -> Result<(), SpectrumError> {
         let faults = FaultFrequencies::of(params);
         let lines = [faults.ftf, faults.bpfo, faults.bpfi, 2.0 * faults.bsf];
+        let mut kurtoses = Vec::with_capacity(self.settings.channels.len());
         for ch in &self.settings.channels {
             let series = &ch.samples(out, sensors)[window.clone()];
             let env = self.plan.analyse(series, self.settings.band)?;
@@ -372,8 +385,9 @@ impl EnvelopeAnalysis {
             metrics.extend([env.band.low, env.band.high, env.band_kurtosis]);
             metrics.extend(lines.map(|f| band_energy(&env.spectrum, &self.freqs, f)));
             spectra.push(env.spectrum);
-            spectra.push(env.spectral_kurtosis);
+            kurtoses.push(env.spectral_kurtosis);
         }
+        spectra.extend(kurtoses);
         metrics.extend(faults.values());
         metrics.extend(FaultFrequencies::orders(params).values());
         Ok(())
@@ -383,7 +397,9 @@ impl EnvelopeAnalysis {
 /// What the signal processing derives from one case.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CaseAnalysis {
-    /// One amplitude spectrum per requested channel, in request order.
+    /// One amplitude spectrum per requested channel, in request order; with an
+    /// envelope analysis then each channel's envelope spectrum, then each one's
+    /// spectral kurtosis (over its own frequencies, [`envelope::sk_frequencies`]).
     pub spectra: Vec<Vec<f64>>,
     /// One value per [`metric_specs`] entry but the last (`wall_time`, which the
     /// caller measures around the whole case).

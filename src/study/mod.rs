@@ -415,11 +415,11 @@ impl Study {
         }
     }
 
-    /// Spectra per case the file stores (`[case, frequency]` variables): the spectrum
-    /// channels', and an envelope spectrum and a spectral kurtosis per envelope
-    /// channel.
+    /// Spectra per case the file stores over `frequency`: the spectrum channels', and
+    /// an envelope spectrum per envelope channel (each also has a spectral kurtosis,
+    /// over `sk_frequency`).
     pub fn stored_spectra_count(&self) -> usize {
-        self.spectrum_channels.len() + 2 * self.envelope.as_ref().map_or(0, |e| e.channels.len())
+        self.spectrum_channels.len() + self.envelope.as_ref().map_or(0, |e| e.channels.len())
     }
 
     /// Order spectra per case ([`crate::signal::order_spectrum_specs`]).

@@ -98,14 +98,15 @@ def stft_segment(n):
 
 
 def spectral_kurtosis(y, n):
+    """SK over segments of stft_segment(n) samples, each transformed at its own length."""
     seg = stft_segment(n)
     hop = seg // 2
     count = (n - seg) // hop + 1
     w = hann(seg)
-    s2 = np.zeros(n // 2 + 1)
-    s4 = np.zeros(n // 2 + 1)
+    s2 = np.zeros(seg // 2 + 1)
+    s4 = np.zeros(seg // 2 + 1)
     for m in range(count):
-        p = np.abs(np.fft.rfft(w * y[m * hop : m * hop + seg], n)) ** 2
+        p = np.abs(np.fft.rfft(w * y[m * hop : m * hop + seg])) ** 2
         s2 += p
         s4 += p * p
     return count * s4 / s2**2 - 2
@@ -134,6 +135,11 @@ def test_the_study_has_every_envelope_variable(f):
     assert f.attrs["stft_segment"] == stft_segment(n)
     spectrum = f["bearing_force_envelope_spectrum"]
     assert spectrum.dims[1][0].name == "/frequency"
+    sk = f["bearing_force_spectral_kurtosis"]
+    assert sk.dims[1][0].name == "/sk_frequency"
+    seg = stft_segment(n)
+    np.testing.assert_array_equal(f["sk_frequency"][:], np.arange(seg // 2 + 1) * f.attrs["sample_rate"] / seg)
+    assert text(f["sk_frequency"].attrs["units"]) == "Hz"
     assert text(spectrum.attrs["units"]) == "N2"
     assert text(f["bearing_force_envelope_energy_bpfo"].attrs["units"]) == "N4"
     assert text(f["slider_acceleration_envelope_spectrum"].attrs["units"]) == "m2 s-4"

@@ -3,7 +3,8 @@ every dimension (replicates, whole revolutions, order spectra, envelope analysis
 
 - the coordinates `case`, `time`, `frequency`, `reference` come first; `replicate`,
   `revolution` and `order` each sit just before the first variable over them;
-- the series, spectra and reference series are chunked one row per chunk (filtered
+- the series, spectra (and spectral kurtoses, over `sk_frequency`) and reference
+  series are chunked one row per chunk (filtered
   with the default compression); the `[case, replicate]`, `[case, revolution]` and
   `[case, order]` arrays and the 1-D numeric variables are chunked in whole rows of up
   to 65 536 values, uncompressed;
@@ -63,7 +64,7 @@ def whole_rows(shape):
 
 
 def test_series_and_spectra_are_chunked_by_row_and_the_others_in_whole_rows(f):
-    kinds = {"time": 0, "frequency": 0, "replicate": 0, "revolution": 0, "order": 0}
+    kinds = {"time": 0, "frequency": 0, "sk_frequency": 0, "replicate": 0, "revolution": 0, "order": 0}
     for name in f:
         var = f[name]
         if var.dtype.kind == "O":
@@ -75,7 +76,7 @@ def test_series_and_spectra_are_chunked_by_row_and_the_others_in_whole_rows(f):
             continue
         first, second = dims(var)
         kinds[second] += 1
-        if second in ("time", "frequency"):
+        if second in ("time", "frequency", "sk_frequency"):
             assert first in ("case", "reference"), name
             assert var.chunks == (1, var.shape[1]), (name, var.chunks)
             assert var.compression == "gzip" and var.shuffle, name

@@ -170,6 +170,7 @@ impl Creator<'_> {
         if !l.orders.is_empty() {
             let meta = ("1", "order: cycles per crank revolution");
             let dim = self.coordinate(ORDER, &l.orders, meta, dimid)?;
+            dimid += 1;
             self.whole_rows(
                 &dim,
                 l.orders.len(),
@@ -184,6 +185,13 @@ impl Creator<'_> {
         }
         for spec in &l.spectra {
             self.array(spec, Role::Spectrum, &case, &frequency)?;
+        }
+        if !l.sk_frequencies.is_empty() {
+            let meta = ("Hz", "frequency of the spectral kurtosis (STFT bin)");
+            let dim = self.coordinate(SK_FREQUENCY, &l.sk_frequencies, meta, dimid)?;
+            for spec in &l.kurtosis {
+                self.array(spec, Role::SpectralKurtosis, &case, &dim)?;
+            }
         }
         for p in &l.reference_parameters {
             self.parameter(p, Role::ReferenceParameter, &reference)?;

@@ -16,7 +16,8 @@ use super::error::{AtVariable, StudyFileError};
 use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
-    REPLICATE_ERROR_MESSAGE, REPLICATE_STATUS, REVOLUTION, ROLE_ATTR, STATUS, TIME, TIME_UNITS,
+    REPLICATE_ERROR_MESSAGE, REPLICATE_STATUS, REVOLUTION, ROLE_ATTR, SK_FREQUENCY, STATUS, TIME,
+    TIME_UNITS,
 };
 use super::reader::{read_layout, read_messages, StudyReader};
 use super::reserve::Reservation;
@@ -39,7 +40,9 @@ use create::*;
 pub struct Record<'a, Row: ?Sized> {
     /// One row per [`Layout::series`], `times.len()` values each (their units).
     pub series: &'a [&'a Row],
-    /// One row per [`Layout::spectra`], `frequencies.len()` values each.
+    /// One row per [`Layout::spectra`], `frequencies.len()` values each, then one
+    /// per [`Layout::kurtosis`], `sk_frequencies.len()` values each
+    /// ([`Layout::spectrum_rows`]).
     pub spectra: &'a [&'a Row],
     /// One value per [`Layout::metrics`], then, per
     /// [`Layout::replicate_metrics`], one per replicate, then, per
@@ -360,6 +363,7 @@ impl StudyWriter {
             .iter()
             .zip(&layout.series)
             .chain(rows.spectra.iter().zip(&layout.spectra))
+            .chain(rows.kurtosis.iter().zip(&layout.kurtosis))
             .chain(rows.reference_series.iter().zip(&layout.reference_series));
         let filters = encode::filters(layout.storage);
         for (ds, spec) in arrays {
@@ -465,9 +469,10 @@ impl StudyWriter {
     ) -> Result<(), StudyFileError> {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
         let n_time = self.layout.times.len();
-        let n_freq = self.layout.frequencies.len();
-        self.check_rows("series", &self.layout.series, record.series, n_time)?;
-        self.check_rows("spectra", &self.layout.spectra, record.spectra, n_freq)?;
+        let series = self.layout.series.iter().map(|s| (s, n_time));
+        self.check_rows("series", series, record.series)?;
+        let spectra: Vec<_> = self.layout.spectrum_rows().collect();
+        self.check_rows("spectra", spectra.into_iter(), record.spectra)?;
         let n_values = self.layout.n_metric_values();
         if !record.metrics.is_empty() && record.metrics.len() != n_values {
             return Err(self.record_error(
@@ -516,12 +521,8 @@ impl StudyWriter {
                 ),
             ));
         }
-        self.check_rows(
-            "reference_series",
-            &self.layout.reference_series,
-            series,
-            n_time,
-        )?;
+        let specs = self.layout.reference_series.iter().map(|s| (s, n_time));
+        self.check_rows("reference_series", specs, series)?;
         for (i, values) in series.iter().enumerate() {
             let (ds, name) = (
                 &self.rows.reference_series[i],
@@ -561,12 +562,11 @@ impl StudyWriter {
 
     /// Checks a record's list of rows against the layout's variables: empty, or one
     /// row of `len` elements per variable.
-    fn check_rows<R: Row + ?Sized>(
+    fn check_rows<'s, R: Row + ?Sized>(
         &self,
         group: &str,
-        specs: &[VarSpec],
+        specs: impl ExactSizeIterator<Item = (&'s VarSpec, usize)>,
         values: &[&R],
-        len: usize,
     ) -> Result<(), StudyFileError> {
         if values.is_empty() {
             return Ok(());
@@ -577,7 +577,7 @@ impl StudyWriter {
                 format!("{} slices for {} variables", values.len(), specs.len()),
             ));
         }
-        for (spec, v) in specs.iter().zip(values) {
+        for ((spec, len), v) in specs.zip(values) {
             if let Some(reason) = v.misfit(len, &self.encoder) {
                 return Err(self.record_error(&spec.name, reason));
             }
@@ -604,8 +604,8 @@ fn case_arrays<'a, R: ?Sized>(
     let spectra = record
         .spectra
         .iter()
-        .zip(&rows.spectra)
-        .zip(&layout.spectra);
+        .zip(rows.spectra.iter().chain(&rows.kurtosis))
+        .zip(layout.spectra.iter().chain(&layout.kurtosis));
     series
         .chain(spectra)
         .map(|((values, ds), spec)| (&**values, ds, spec))

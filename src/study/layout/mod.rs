@@ -13,10 +13,11 @@ pub use variables::{
 
 use crate::numeric::hash::fnv1a;
 use crate::output::{Layout, Storage, VarSpec};
+use crate::signal::envelope::sk_frequencies;
 use crate::signal::replicates::replicate_metric_specs;
 use crate::signal::revolutions::revolution_metric_specs;
 use crate::signal::spectrum::{frequencies, AMPLITUDE_NORMALISATION};
-use crate::signal::{envelope_spectrum_specs, order_spectrum_specs};
+use crate::signal::{envelope_spectrum_specs, order_spectrum_specs, spectral_kurtosis_specs};
 use crate::study::{Shard, Study};
 
 /// The specification this engine implements: `docs/model.md` of this studyrun
@@ -81,12 +82,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
                 .with("window", study.window.as_str())
                 .with("normalisation", AMPLITUDE_NORMALISATION)
             })
-            .chain(
-                study
-                    .envelope
-                    .iter()
-                    .flat_map(|e| envelope_spectrum_specs(e, n_window)),
-            )
+            .chain(study.envelope.iter().flat_map(envelope_spectrum_specs))
             .collect(),
         metrics: study_metric_specs(study),
         replicates: study
@@ -107,6 +103,15 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         order_spectra: study.orders.map_or(Vec::new(), |o| {
             order_spectrum_specs(&o, &study.spectrum_channels, study.envelope.as_ref())
         }),
+        sk_frequencies: match study.envelope {
+            Some(_) => sk_frequencies(n_window, study.sampling.sample_rate),
+            None => Vec::new(),
+        },
+        kurtosis: study
+            .envelope
+            .iter()
+            .flat_map(|e| spectral_kurtosis_specs(e, n_window))
+            .collect(),
         parameters,
         reference_parameters,
         reference_series: reference_specs(study),
