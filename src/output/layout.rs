@@ -407,6 +407,14 @@ impl Layout {
             + self.order_spectra.len() * self.orders.len()
     }
 
+    /// The root attribute `name`, if the layout has one.
+    pub fn attribute(&self, name: &str) -> Option<&AttrValue> {
+        self.attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+    }
+
     /// The spectrum-like rows of a case record ([`Record::spectra`](super::Record::spectra)),
     /// each with its length: every [`Layout::spectra`] entry over `frequencies`, then
     /// every [`Layout::kurtosis`] entry over `sk_frequencies`.

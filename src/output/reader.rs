@@ -195,11 +195,7 @@ impl StudyReader {
 
     /// The root attribute `name`, if the caller wrote one.
     pub fn attribute(&self, name: &str) -> Option<&AttrValue> {
-        self.layout
-            .attributes
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v)
+        self.layout.attribute(name)
     }
 
     /// Reads row `row` of every `[case, ...]` variable (`row` indexes
@@ -590,13 +586,7 @@ fn root_attributes(file: &File, path: &Path) -> Result<Vec<(String, AttrValue)>,
 /// holds the ids `id mod N = K − 1`), as many as `file_cases`. A layout without these
 /// attributes (not a study's) passes.
 fn check_case_ids(layout: &Layout) -> Result<(), String> {
-    let attribute = |name: &str| {
-        layout
-            .attributes
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v)
-    };
+    let attribute = |name: &str| layout.attribute(name);
     if let Some(&AttrValue::I64(n)) = attribute("file_cases") {
         if usize::try_from(n).ok() != Some(layout.n_cases()) {
             return Err(format!(
@@ -640,13 +630,7 @@ const TIME_REWRITE_TOLERANCE: f64 = 2e-9;
 /// `time` a tool rewrote merges and resumes like the original. Otherwise (or without
 /// the sampling attributes) the times stay as read.
 fn restore_written_times(layout: &mut Layout) {
-    let attribute = |name: &str| {
-        layout
-            .attributes
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v)
-    };
+    let attribute = |name: &str| layout.attribute(name);
     let (Some(&AttrValue::F64(rate)), Some(&AttrValue::I64(decimate))) =
         (attribute("sample_rate"), attribute("decimate"))
     else {

@@ -2,15 +2,12 @@
 //! estimates of `--dry-run`.
 
 use crate::output::{ChunkEncoder, Status, Storage};
-use crate::signal::spectrum::SpectrumPlan;
-use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
 use crate::study::Study;
 
-use super::case::run_case;
+use super::case::Analyses;
 use super::journal::JournalRecord;
 use super::references::run_reference;
 use super::stats::thread_cpu;
-use super::window_of;
 
 /// One case run whole, as a worker runs it, and what it cost.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,29 +30,8 @@ pub fn measure_case(study: &Study, row: usize) -> Result<Measured, String> {
     let start = thread_cpu();
     let reference = run_reference(study, case.reference).map_err(|e| e.to_string())?;
     let after_reference = thread_cpu();
-    let n_window = study.analysis_window().len();
-    let window_error = |e: &dyn std::fmt::Display| format!("the analysed window: {e}");
-    let mut plan = SpectrumPlan::new(n_window, window_of(study)).map_err(|e| window_error(&e))?;
-    let mut envelope = match study.envelope.clone() {
-        Some(s) => Some(
-            EnvelopeAnalysis::new(s, n_window, study.sampling.sample_rate)
-                .map_err(|e| window_error(&e))?,
-        ),
-        None => None,
-    };
-    let mut orders = match study.orders {
-        Some(s) => Some(OrderAnalysis::new(s).map_err(|e| window_error(&e))?),
-        None => None,
-    };
-    let result = run_case(
-        study,
-        row,
-        case,
-        &reference,
-        &mut plan,
-        envelope.as_mut(),
-        orders.as_mut(),
-    );
+    let mut analyses = Analyses::new(study).map_err(|e| format!("the analysed window: {e}"))?;
+    let result = analyses.run(study, row, case, &reference);
     if result.status == Status::Failed {
         return Err(result.message);
     }

@@ -5,7 +5,7 @@ use crate::mechanism::{CaseParams, Location};
 use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::revolutions::{revolution_metric_specs, revolution_metrics, revolution_windows};
-use crate::signal::spectrum::SpectrumPlan;
+use crate::signal::spectrum::{SpectrumError, SpectrumPlan};
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis, OrderAnalysis};
 use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
 use crate::study::study_metric_specs;
@@ -48,6 +48,51 @@ pub(crate) struct CaseCost {
     pub analysis: f64,
 }
 
+/// A worker's analysis plans for the study's analysed window, reused case after case:
+/// the spectra's, and the envelope and order analyses' when the study has them.
+pub(crate) struct Analyses {
+    plan: SpectrumPlan,
+    envelope: Option<EnvelopeAnalysis>,
+    orders: Option<OrderAnalysis>,
+}
+
+impl Analyses {
+    /// The plans for `study`; an error only for a window no spectrum can be planned
+    /// for (the study layout refuses it first).
+    pub(crate) fn new(study: &Study) -> Result<Self, SpectrumError> {
+        let n_window = study.analysis_window().len();
+        let envelope = study
+            .envelope
+            .clone()
+            .map(|s| EnvelopeAnalysis::new(s, n_window, study.sampling.sample_rate))
+            .transpose()?;
+        Ok(Self {
+            plan: SpectrumPlan::new(n_window, super::window_of(study))?,
+            envelope,
+            orders: study.orders.map(OrderAnalysis::new).transpose()?,
+        })
+    }
+
+    /// [`run_case`] with these plans.
+    pub(crate) fn run(
+        &mut self,
+        study: &Study,
+        row: usize,
+        case: &Case,
+        reference: &CaseOutput,
+    ) -> CaseResult {
+        run_case(
+            study,
+            row,
+            case,
+            reference,
+            &mut self.plan,
+            self.envelope.as_mut(),
+            self.orders.as_mut(),
+        )
+    }
+}
+
 /// Simulates `case` at file row `row` and derives spectra and metrics against
 /// `reference` (the ideal mechanism at the same speed), the series of the study's
 /// sensors (docs/model.md §7.8, made before the analysis, which may read them), the
@@ -59,7 +104,7 @@ pub(crate) struct CaseCost {
 /// (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
 /// perturbed replicate leaves its metrics NaN and its message in
 /// [`CaseResult::replicate_messages`].
-pub(crate) fn run_case(
+fn run_case(
     study: &Study,
     row: usize,
     case: &Case,

@@ -23,7 +23,7 @@ mod stats;
 
 pub use calibrate::{measure_case, Measured};
 pub use case::check_eccentricity;
-use case::run_case;
+use case::Analyses;
 pub use error::RunError;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
@@ -42,8 +42,7 @@ use crate::output::{
     new_journal_path, overwrite, remove_durably, rename_durably, side_paths, ChunkEncoder,
     DataFile, Layout, OutputLock, Status, StudyReader, StudyWriter,
 };
-use crate::signal::spectrum::{SpectrumPlan, Window};
-use crate::signal::{EnvelopeAnalysis, OrderAnalysis};
+use crate::signal::spectrum::Window;
 use crate::study::Shard;
 use crate::study::{stored_reference_channels, study_layout, Study, StudyFingerprint};
 
@@ -516,8 +515,6 @@ fn run_pending(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(work.jobs.max(1))
         .build()?;
-    let n_window = work.study.analysis_window().len();
-    let window = window_of(work.study);
     // At most two records per worker wait for the writer: memory stays bounded.
     let (tx, rx) = sync_channel::<Box<JournalRecord>>(2 * work.jobs.max(1));
     let tally = WorkerTally::default();
@@ -529,15 +526,8 @@ fn run_pending(
             // writer is gone.
             let next = AtomicUsize::new(0);
             pool.broadcast(|_| {
-                let mut plan = SpectrumPlan::new(n_window, window)
-                    .expect("window length checked by the layout");
-                let mut envelope = work.study.envelope.clone().map(|settings| {
-                    EnvelopeAnalysis::new(settings, n_window, work.study.sampling.sample_rate)
-                        .expect("window length checked by the layout")
-                });
-                let mut orders = work.study.orders.map(|settings| {
-                    OrderAnalysis::new(settings).expect("window length checked by the layout")
-                });
+                let mut analyses =
+                    Analyses::new(work.study).expect("window length checked by the layout");
                 let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
@@ -545,15 +535,7 @@ fn run_pending(
                         .references
                         .get(case.reference)
                         .expect("every reference ran when the file was created");
-                    let result = run_case(
-                        work.study,
-                        row,
-                        case,
-                        &reference,
-                        &mut plan,
-                        envelope.as_mut(),
-                        orders.as_mut(),
-                    );
+                    let result = analyses.run(work.study, row, case, &reference);
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));
                     tally.case(
