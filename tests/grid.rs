@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::common::{refused, study};
 use studyrun::mechanism::Location;
 use studyrun::study::Study;
 
@@ -22,16 +23,6 @@ grid:
   rpm: [300, 600]
   location: [crank_ground, crank_rod]
 "#;
-
-fn study(text: &str) -> Study {
-    Study::from_yaml(text, Path::new("grid.yaml")).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn refused(text: &str) -> String {
-    Study::from_yaml(text, Path::new("grid.yaml"))
-        .expect_err("must be refused")
-        .to_string()
-}
 
 #[test]
 fn the_documented_example_expands_in_file_order_first_axis_slowest() {

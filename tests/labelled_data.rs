@@ -3,24 +3,12 @@
 //! `rpm` axis sits beside explicit cases that run a speed profile, every constant-speed
 //! case storing its speed.
 
-use std::path::Path;
-
 use studyrun::output::{Layout, ParamValues, StudyReader};
 use studyrun::signal::sensor::{add_noise, noise_seed};
 use studyrun::study::params::axis_value;
 use studyrun::study::{study_layout, Study};
 
-use crate::common::bits;
-
-fn study(text: &str) -> Study {
-    Study::from_yaml(text, Path::new("grid.yaml")).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn refused(text: &str) -> String {
-    Study::from_yaml(text, Path::new("grid.yaml"))
-        .expect_err("must be refused")
-        .to_string()
-}
+use crate::common::{bits, refused, study};
 
 /// The values of the `[case]` parameter `name` of a layout, as numbers or texts.
 fn numbers(layout: &Layout, name: &str) -> Vec<f64> {

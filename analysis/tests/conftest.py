@@ -149,3 +149,24 @@ def check_png(path, min_kb=15, min_pixels=300):
 def assert_png():
     """The PNG check `check_png`."""
     return check_png
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """Every figure the plots of `figures` and `diagnosis_figures` save, kept open and
+    drawn, for the tests to read: a list filled as they save."""
+    from analysis import diagnosis_figures, figures
+
+    kept = []
+
+    def keeper(save):
+        def keep(fig, out, dpi):
+            fig.canvas.draw()
+            kept.append(fig)
+            return save(fig, out, dpi)
+
+        return keep
+
+    for module in (figures, diagnosis_figures):
+        monkeypatch.setattr(module, "_save", keeper(module._save))
+    return kept

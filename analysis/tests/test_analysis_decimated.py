@@ -11,20 +11,6 @@ from analysis import diagnosis_figures as dfig
 from analysis.studyfile import series_rate
 
 
-@pytest.fixture
-def drawn(monkeypatch):
-    """The figures the diagnosis plots draw, kept open: a list filled as they save."""
-    figures_drawn = []
-    save = dfig._save
-
-    def keep(fig, out, dpi):
-        figures_drawn.append(fig)
-        return save(fig, out, dpi)
-
-    monkeypatch.setattr(dfig, "_save", keep)
-    return figures_drawn
-
-
 def by_fault(ds, keep):
     """{fault label: case position} of the cases whose constant speed passes `keep`
     (NaN for a run-up)."""

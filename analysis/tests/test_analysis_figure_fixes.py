@@ -15,24 +15,6 @@ from analysis import figures, report
 from analysis.studyfile import open_study, text
 
 
-@pytest.fixture
-def drawn(monkeypatch):
-    """Every figure the plots save, kept open (drawn) for the tests to read."""
-    kept = []
-    saves = {module: module._save for module in (figures, dfig)}
-
-    def keeper(save):
-        def keep(fig, out, dpi):
-            fig.canvas.draw()
-            kept.append(fig)
-            return save(fig, out, dpi)
-        return keep
-
-    for module, save in saves.items():
-        monkeypatch.setattr(module, "_save", keeper(save))
-    return kept
-
-
 def zipped_study():
     """ball_count × rpm × (clearance, damping) zipped in three pairs: 3 of the 9
     clearance × damping combinations run."""

@@ -136,21 +136,6 @@ def diagnosis_report(diagnosis_path, tmp_path_factory):
     return outdir, (outdir / "index.md").read_text(encoding="utf-8")
 
 
-@pytest.fixture
-def drawn(monkeypatch):
-    """The figures the diagnosis plots draw, kept open: a list filled as they save."""
-    figures_drawn = []
-    save = dfig._save
-
-    def keep(fig, out, dpi):
-        figures_drawn.append(fig)
-        fig.canvas.draw()
-        return save(fig, out, dpi)
-
-    monkeypatch.setattr(dfig, "_save", keep)
-    return figures_drawn
-
-
 def test_the_diagnosis_study_shows_every_figure(diagnosis_report, assert_png):
     """Orbit, envelope spectra of the bearing force and of the housing accelerometer per
     constant speed, spectrogram, order spectra and rpm–order map of the run-up, a waterfall,

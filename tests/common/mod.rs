@@ -81,6 +81,18 @@ pub fn command(program: impl AsRef<std::ffi::OsStr>) -> Command {
     cmd
 }
 
+/// The study of grid-file `text` (read as `grid.yaml`); panics with the refusal.
+pub fn study(text: &str) -> studyrun::Study {
+    studyrun::Study::from_yaml(text, Path::new("grid.yaml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The refusal of grid-file `text` (read as `grid.yaml`); panics if it is accepted.
+pub fn refused(text: &str) -> String {
+    studyrun::Study::from_yaml(text, Path::new("grid.yaml"))
+        .expect_err("must be refused")
+        .to_string()
+}
+
 /// Runs the `studyrun` binary in `dir` with `args` and asserts that it succeeds.
 pub fn studyrun_ok(dir: &Path, args: &[&str]) -> Output {
     let out = command(env!("CARGO_BIN_EXE_studyrun"))
