@@ -64,6 +64,7 @@
 //! and [`inspect`] summarises one.
 
 mod attributes;
+mod chunk_index;
 mod datasets;
 mod dimension_scales;
 mod direct_chunk;

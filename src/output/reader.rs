@@ -7,6 +7,7 @@ use hdf5::types::TypeDescriptor;
 use hdf5::{Dataset, File, IndexType, IterationOrder};
 
 use super::attributes;
+use super::chunk_index;
 use super::datasets::{check_row, RowDatasets};
 use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
@@ -105,7 +106,9 @@ impl StudyReader {
 
     /// Reads every value of the file's variables and so checks every checksum: the
     /// Fletcher-32 of every chunk (HDF5 checks it on reading) and the digest of every
-    /// string variable (checked at open); the reads are first checked for crashes
+    /// string variable (checked at open); then checks the chunk index holds every
+    /// chunk the statuses say was written, each inside the file and none sharing
+    /// another's bytes (`output::chunk_index`); the reads are first checked for crashes
     /// ([`StudyReader::check_cases`]). Returns the variables that carry no checksum (a
     /// netCDF tool's rewrite may drop them): none in a file studyrun wrote.
     pub fn verify(&self) -> Result<Vec<String>, StudyFileError> {
@@ -116,6 +119,8 @@ impl StudyReader {
         for row in 0..self.layout.n_cases() {
             self.read_case(row)?;
         }
+        chunk_index::check(&self.file, &self.layout, &self.rows, &self.statuses()?)
+            .map_err(|reason| damaged(&self.path, reason))?;
         let mut unchecked = Vec::new();
         for name in member_names(&self.file).at(&self.path, "/")? {
             let Ok(ds) = self.file.dataset(&name) else {
