@@ -559,6 +559,23 @@ fn errors_name_the_file_and_the_variable() {
         err.contains("plain.h5") && err.contains("studyrun_file_format"),
         "{err}"
     );
+    // A study file of another format version: named as such, and `--force` may
+    // replace it (it is a study file), unlike the plain HDF5 file.
+    let older = dir.path().join("older.h5");
+    hdf5::File::create(&older)
+        .unwrap()
+        .new_attr::<i64>()
+        .create("studyrun_file_format")
+        .unwrap()
+        .write_scalar(&1i64)
+        .unwrap();
+    let err = StudyReader::open(&older).unwrap_err().to_string();
+    assert!(
+        err.contains("older.h5") && err.contains("format version 1, this build reads version"),
+        "{err}"
+    );
+    assert!(studyrun::output::overwrite::check_replaceable(&older).is_ok());
+    assert!(studyrun::output::overwrite::check_replaceable(&plain).is_err());
     let err = StudyReader::open(dir.path().join("missing.h5"))
         .unwrap_err()
         .to_string();

@@ -10,6 +10,7 @@ use hdf5::Location;
 
 use super::layout::AttrValue;
 use super::text::{self, Strings};
+use crate::signal::DESCRIPTIVE_ATTRIBUTES;
 
 /// The root attribute netCDF tools append their command lines to (CF §2.6.2).
 pub(super) const HISTORY: &str = "history";
@@ -130,4 +131,17 @@ pub(super) fn read_str(loc: &Location, name: &str) -> hdf5::Result<String> {
             "attribute `{name}` is {other:?}, expected a string"
         ))),
     }
+}
+
+/// The [`DESCRIPTIVE_ATTRIBUTES`] among `names`, the attributes of `ds`, with their
+/// values, in that list's order.
+pub(super) fn descriptive(
+    ds: &Location,
+    names: &[String],
+) -> hdf5::Result<Vec<(String, AttrValue)>> {
+    DESCRIPTIVE_ATTRIBUTES
+        .iter()
+        .filter(|d| names.iter().any(|n| n == *d))
+        .map(|&d| Ok((d.to_string(), read(ds, d)?)))
+        .collect()
 }

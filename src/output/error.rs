@@ -70,7 +70,20 @@ pub enum StudyFileError {
         /// What is there instead: `does not exist`, `is a directory`, ….
         reason: String,
     },
-    /// The file is not a study file of this version, or its content is inconsistent.
+    /// A study file of another format version than this build reads.
+    #[error(
+        "{path}: a study file of format version {found}, this build reads version {reads}: \
+         run the study again, or read it with the studyrun that wrote it"
+    )]
+    Version {
+        /// The file.
+        path: PathBuf,
+        /// Its `studyrun_file_format`.
+        found: String,
+        /// The version this build reads.
+        reads: i64,
+    },
+    /// The file is not a study file, or its content is inconsistent.
     #[error("{path}: variable `{variable}`: not a readable study file: {reason}")]
     Format {
         /// The file.

@@ -71,8 +71,11 @@ pub const REFERENCE_INDEX: &str = "reference_index";
 pub(super) const ROLE_ATTR: &str = "studyrun_role";
 /// Root attribute marking a study file; its value is [`FORMAT_VERSION`].
 pub(super) const FORMAT_ATTR: &str = "studyrun_file_format";
+/// Root attribute: the CRC-32 of the names and roles of the variables that carry a
+/// `studyrun_role`, so that a variable whose attributes were lost is missed.
+pub(super) const VARIABLES_DIGEST_ATTR: &str = "studyrun_variables_crc32";
 /// The file format version this module writes and reads.
-pub(super) const FORMAT_VERSION: i64 = 1;
+pub(super) const FORMAT_VERSION: i64 = 2;
 
 /// The names no caller variable may take.
 const RESERVED: [&str; 13] = [
@@ -396,6 +399,32 @@ impl Layout {
         self.reference_ids.len()
     }
 
+    /// The name and role of every variable that carries a `studyrun_role`, sorted by
+    /// name (netCDF tools may reorder variables).
+    pub(super) fn role_variables(&self) -> Vec<(&str, Role)> {
+        let mut all: Vec<(&str, Role)> = Vec::new();
+        for (ps, role) in [
+            (&self.parameters, Role::Parameter),
+            (&self.reference_parameters, Role::ReferenceParameter),
+        ] {
+            all.extend(ps.iter().map(|p| (p.spec.name.as_str(), role)));
+        }
+        for (vs, role) in [
+            (&self.metrics, Role::Metric),
+            (&self.replicate_metrics, Role::ReplicateMetric),
+            (&self.revolution_metrics, Role::RevolutionMetric),
+            (&self.order_spectra, Role::OrderSpectrum),
+            (&self.series, Role::Series),
+            (&self.spectra, Role::Spectrum),
+            (&self.kurtosis, Role::SpectralKurtosis),
+            (&self.reference_series, Role::ReferenceSeries),
+        ] {
+            all.extend(vs.iter().map(|v| (v.name.as_str(), role)));
+        }
+        all.sort_unstable_by_key(|&(name, _)| name);
+        all
+    }
+
     /// Number of metric values a case record holds: one per [`Layout::metrics`],
     /// then one per replicate for each of [`Layout::replicate_metrics`], then one per
     /// revolution for each of [`Layout::revolution_metrics`], then one per order for
@@ -580,9 +609,10 @@ impl Layout {
                 || name.contains('\0')
                 || name.starts_with('_')
                 || name == FORMAT_ATTR
+                || name == VARIABLES_DIGEST_ATTR
             {
                 return Err(format!(
-                    "root attribute name {name:?} must be non-empty, without NUL, not starting with `_`, not `{FORMAT_ATTR}`"
+                    "root attribute name {name:?} must be non-empty, without NUL, not starting with `_`, not `{FORMAT_ATTR}` or `{VARIABLES_DIGEST_ATTR}`"
                 ));
             }
             if !seen.insert(name.as_str()) {

@@ -64,7 +64,6 @@
 //! and [`inspect`] summarises one.
 
 mod attributes;
-mod chunk_index;
 mod datasets;
 mod dimension_scales;
 mod direct_chunk;
@@ -80,6 +79,7 @@ mod paths;
 mod reader;
 mod reserve;
 mod shuffle;
+mod structure;
 mod text;
 mod writer;
 

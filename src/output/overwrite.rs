@@ -16,7 +16,7 @@ use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::Path;
 
 use super::OutputError;
-use crate::output::StudyReader;
+use crate::output::{StudyFileError, StudyReader};
 
 /// What kind of thing `m` is, for messages.
 fn kind(m: &Metadata) -> &'static str {
@@ -89,7 +89,8 @@ pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, Out
 /// `--force` replaces.
 pub fn check_replaceable(output: &Path) -> Result<(), OutputError> {
     match StudyReader::open(output) {
-        Ok(_) => Ok(()),
+        // One of an older or newer studyrun is a study file too.
+        Ok(_) | Err(StudyFileError::Version { .. }) => Ok(()),
         Err(e) => Err(OutputError::Refused(format!(
             "{} is not a studyrun result file, and --force replaces only those ({}); \
              nothing was changed: remove it yourself if you mean to, or choose another output",

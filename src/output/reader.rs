@@ -7,17 +7,16 @@ use hdf5::types::TypeDescriptor;
 use hdf5::{Dataset, File, IndexType, IterationOrder};
 
 use super::attributes;
-use super::chunk_index;
 use super::datasets::{check_row, RowDatasets};
 use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
     AttrValue, Layout, Param, ParamValues, Role, Status, Storage, VarSpec, CASE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE, REPLICATE_STATUS,
-    REVOLUTION, ROLE_ATTR, SK_FREQUENCY, STATUS, TIME, TIME_UNITS,
+    REVOLUTION, ROLE_ATTR, SK_FREQUENCY, STATUS, TIME, TIME_UNITS, VARIABLES_DIGEST_ATTR,
 };
+use super::structure;
 use super::text::{self, Strings};
-use crate::signal::DESCRIPTIVE_ATTRIBUTES;
 use crate::simulate::sample_time;
 
 /// One case read back from a file (owned). Values stored as float32 are widened
@@ -108,7 +107,7 @@ impl StudyReader {
     /// Fletcher-32 of every chunk (HDF5 checks it on reading) and the digest of every
     /// string variable (checked at open); then checks the chunk index holds every
     /// chunk the statuses say was written, each inside the file and none sharing
-    /// another's bytes (`output::chunk_index`); the reads are first checked for crashes
+    /// another's bytes (`output::structure`); the reads are first checked for crashes
     /// ([`StudyReader::check_cases`]). Returns the variables that carry no checksum (a
     /// netCDF tool's rewrite may drop them): none in a file studyrun wrote.
     pub fn verify(&self) -> Result<Vec<String>, StudyFileError> {
@@ -119,7 +118,7 @@ impl StudyReader {
         for row in 0..self.layout.n_cases() {
             self.read_case(row)?;
         }
-        chunk_index::check(&self.file, &self.layout, &self.rows, &self.statuses()?)
+        structure::check_chunks(&self.file, &self.layout, &self.rows, &self.statuses()?)
             .map_err(|reason| damaged(&self.path, reason))?;
         let mut unchecked = Vec::new();
         for name in member_names(&self.file).at(&self.path, "/")? {
@@ -127,9 +126,20 @@ impl StudyReader {
                 continue;
             };
             text::check_attributes_digest(&ds).at(&self.path, &name)?;
+            let descriptor = ds
+                .dtype()
+                .and_then(|t| t.to_descriptor())
+                .map_err(|e| damaged(&self.path, format!("`{name}`: its datatype: {e}")))?;
+            if matches!(
+                descriptor,
+                TypeDescriptor::Float(_) | TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_)
+            ) {
+                structure::check_numeric_type(&ds)
+                    .map_err(|reason| damaged(&self.path, format!("`{name}`: {reason}")))?;
+            }
             let string = matches!(
-                ds.dtype().and_then(|t| t.to_descriptor()),
-                Ok(TypeDescriptor::VarLenUnicode | TypeDescriptor::VarLenAscii)
+                descriptor,
+                TypeDescriptor::VarLenUnicode | TypeDescriptor::VarLenAscii
             );
             let checked = if string {
                 ds.attr_names()
@@ -399,6 +409,7 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
     let read = |name: &str| file.dataset(name).at(path, name);
     let mut layout = coordinates(file, path)?;
     read_variables(file, path, &mut layout)?;
+    check_variables_digest(file, path, &layout)?;
     layout.attributes = root_attributes(file, path)?;
     let status = read(STATUS)?;
     check_type(&status, path, STATUS, "integers", |t| {
@@ -408,6 +419,34 @@ pub(super) fn read_layout(file: &File, path: &Path) -> Result<Layout, StudyFileE
     layout.validate().map_err(|reason| format(reason, "/"))?;
     check_case_ids(&layout).map_err(|reason| format(reason, CASE))?;
     Ok(layout)
+}
+
+/// Checks the names and roles of the variables `layout` read from `file` against the
+/// root attribute [`VARIABLES_DIGEST_ATTR`], if the file has it (a variable whose
+/// attributes were lost is read as someone else's and left out of the layout).
+fn check_variables_digest(file: &File, path: &Path, layout: &Layout) -> Result<(), StudyFileError> {
+    if !file
+        .attr_names()
+        .at(path, "/")?
+        .iter()
+        .any(|a| a == VARIABLES_DIGEST_ATTR)
+    {
+        return Ok(());
+    }
+    // netCDF tools rewrite a scalar attribute as a one-element array.
+    let stored = file
+        .attr(VARIABLES_DIGEST_ATTR)
+        .and_then(|a| a.read_raw::<i64>())
+        .at(path, VARIABLES_DIGEST_ATTR)?;
+    if stored != [text::variables_digest(layout)] {
+        return Err(format_error(path)(
+            "the variables with a studyrun_role do not match their checksum: a variable \
+             was damaged (its attributes lost), removed or renamed"
+                .into(),
+            VARIABLES_DIGEST_ATTR,
+        ));
+    }
+    Ok(())
 }
 
 /// The error of a file that is no readable study file, at `variable`.
@@ -425,10 +464,14 @@ fn check_format_version(file: &File, path: &Path) -> Result<(), StudyFileError> 
     match attributes::read(file, FORMAT_ATTR) {
         Ok(AttrValue::I64(FORMAT_VERSION)) => {}
         Ok(other) => {
-            return Err(format(
-                format!("format version {other:?}, this build reads {FORMAT_VERSION}"),
-                FORMAT_ATTR,
-            ))
+            return Err(StudyFileError::Version {
+                path: path.to_owned(),
+                found: match other {
+                    AttrValue::I64(v) => v.to_string(),
+                    other => format!("{other:?}"),
+                },
+                reads: FORMAT_VERSION,
+            })
         }
         Err(e) => {
             return Err(format(
@@ -514,7 +557,7 @@ fn read_variables(file: &File, path: &Path, layout: &mut Layout) -> Result<(), S
         let spec = VarSpec {
             units: attributes::read_str(&ds, "units").at(path, &name)?,
             long_name: attributes::read_str(&ds, "long_name").at(path, &name)?,
-            attributes: descriptive_attributes(&ds, &attribute_names).at(path, &name)?,
+            attributes: attributes::descriptive(&ds, &attribute_names).at(path, &name)?,
             name: name.clone(),
         };
         let (rows, cols) = match role {
@@ -576,7 +619,7 @@ fn root_attributes(file: &File, path: &Path) -> Result<Vec<(String, AttrValue)>,
     // a number (arrays, other types) are not the study's.
     for name in names
         .into_iter()
-        .filter(|n| n != FORMAT_ATTR && !n.starts_with('_'))
+        .filter(|n| n != FORMAT_ATTR && n != VARIABLES_DIGEST_ATTR && !n.starts_with('_'))
     {
         if let Ok(value) = attributes::read_value(file, &name).at(path, &name)? {
             attributes.push((name, value));
@@ -746,19 +789,6 @@ fn read_storage(ds: &Dataset) -> hdf5::Result<Storage> {
         float32,
         deflate_level,
     })
-}
-
-/// The attributes of `ds` among [`DESCRIPTIVE_ATTRIBUTES`] (how the variable was made),
-/// in that order; `names` are all of its attributes.
-fn descriptive_attributes(
-    ds: &Dataset,
-    names: &[String],
-) -> hdf5::Result<Vec<(String, AttrValue)>> {
-    DESCRIPTIVE_ATTRIBUTES
-        .iter()
-        .filter(|d| names.iter().any(|n| n == *d))
-        .map(|&d| Ok((d.to_string(), attributes::read(ds, d)?)))
-        .collect()
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@ use std::ffi::{c_void, CStr};
 use std::io::{Read, Seek, SeekFrom};
 use std::sync::OnceLock;
 
+use crate::signal::{AttrValue, DESCRIPTIVE_ATTRIBUTES};
 use hdf5::types::VarLenUnicode;
 use hdf5::{Attribute, Dataset, Datatype};
 use hdf5_sys::h5::{herr_t, H5free_memory};
@@ -88,12 +89,18 @@ pub(super) const DIGEST_ATTR: &str = "studyrun_crc32";
 /// CRC-32 (zlib's) of `strings`: of each one's length in bytes (u64, little-endian)
 /// followed by its UTF-8 bytes.
 pub(super) fn digest<S: AsRef<str>>(strings: &[S]) -> i64 {
-    let crc = strings.iter().fold(0, |crc, s| {
-        let b = s.as_ref().as_bytes();
-        let crc = zlib_rs::crc32::crc32(crc, &(b.len() as u64).to_le_bytes());
-        zlib_rs::crc32::crc32(crc, b)
-    });
-    i64::from(crc)
+    i64::from(
+        strings
+            .iter()
+            .fold(0, |crc, s| digest_continue(crc, s.as_ref())),
+    )
+}
+
+/// The CRC-32 `crc` of some strings ([`digest`]) continued over `text`.
+pub(super) fn digest_continue(crc: u32, text: &str) -> u32 {
+    let b = text.as_bytes();
+    let crc = zlib_rs::crc32::crc32(crc, &(b.len() as u64).to_le_bytes());
+    zlib_rs::crc32::crc32(crc, b)
 }
 
 /// The attribute holding the CRC-32 ([`digest`]) of a variable's text attributes
@@ -111,11 +118,17 @@ pub(super) fn write_digest<S: AsRef<str>>(
     name: &str,
     strings: &[S],
 ) -> hdf5::Result<()> {
+    write_digest_value(ds, name, digest(strings) as u32)
+}
+
+/// Writes the digest attribute `name` of the variable `ds` with the CRC-32 `crc`
+/// (replacing the one there).
+pub(super) fn write_digest_value(ds: &Dataset, name: &str, crc: u32) -> hdf5::Result<()> {
     let attr = match ds.attr(name) {
         Ok(attr) => attr,
         Err(_) => ds.new_attr::<i64>().create(name)?,
     };
-    attr.write_scalar(&digest(strings))
+    attr.write_scalar(&i64::from(crc))
 }
 
 /// Checks `strings`, read from `ds`, against its digest attribute `name` if it has one
@@ -141,13 +154,45 @@ pub(super) fn check_digest<S: AsRef<str>>(
     Ok(())
 }
 
+/// What [`ATTRIBUTES_DIGEST_ATTR`] covers: the text attributes [`DESCRIBED_BY`]
+/// (`described`, an absent one as ""), then `name=value` of each of the variable's
+/// [`DESCRIPTIVE_ATTRIBUTES`] it has (`descriptive`), in that list's order.
+pub(super) fn digested<S: AsRef<str>>(
+    described: &[S],
+    descriptive: &[(String, AttrValue)],
+) -> Vec<String> {
+    let mut all: Vec<String> = described.iter().map(|s| s.as_ref().to_owned()).collect();
+    for name in DESCRIPTIVE_ATTRIBUTES {
+        if let Some((_, value)) = descriptive.iter().find(|(n, _)| n == name) {
+            all.push(match value {
+                AttrValue::Str(s) => format!("{name}={s}"),
+                AttrValue::F64(x) => format!("{name}={x:?}"),
+                AttrValue::I64(i) => format!("{name}={i}"),
+            });
+        }
+    }
+    all
+}
+
+/// The digest of a layout's variable names and roles
+/// ([`VARIABLES_DIGEST_ATTR`](super::layout::VARIABLES_DIGEST_ATTR)).
+pub(super) fn variables_digest(layout: &super::layout::Layout) -> i64 {
+    let strings: Vec<&str> = layout
+        .role_variables()
+        .into_iter()
+        .flat_map(|(name, role)| [name, role.as_str()])
+        .collect();
+    digest(&strings)
+}
+
 /// The text attributes [`DESCRIBED_BY`] of `ds`, an absent one as "", as studyrun
 /// reads them: units of `time` that mean seconds from the epoch (a netCDF tool
-/// respells them) as [`TIME_UNITS`](super::layout::TIME_UNITS).
+/// respells them) as [`TIME_UNITS`](super::layout::TIME_UNITS); then its descriptive
+/// attributes as [`digested`] lists them.
 pub(super) fn described_by(ds: &Dataset) -> hdf5::Result<Vec<String>> {
     let names = ds.attr_names()?;
     let is_time = ds.name() == format!("/{}", super::layout::TIME);
-    DESCRIBED_BY
+    let described = DESCRIBED_BY
         .iter()
         .map(|&a| {
             if !names.iter().any(|n| n == a) {
@@ -162,7 +207,9 @@ pub(super) fn described_by(ds: &Dataset) -> hdf5::Result<Vec<String>> {
                 },
             )
         })
-        .collect()
+        .collect::<hdf5::Result<Vec<String>>>()?;
+    let descriptive = super::attributes::descriptive(ds, &names)?;
+    Ok(digested(&described, &descriptive))
 }
 
 /// Checks the text attributes of `ds` against their digest, if it has one.
@@ -172,7 +219,7 @@ pub(super) fn check_attributes_digest(ds: &Dataset) -> hdf5::Result<()> {
         ds,
         ATTRIBUTES_DIGEST_ATTR,
         &values,
-        "attributes (units, long_name)",
+        "attributes (units, long_name, role and descriptive ones)",
     )
 }
 

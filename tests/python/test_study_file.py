@@ -95,7 +95,7 @@ def test_status_is_a_cf_flag_variable_and_pending_rows_are_nan(ds, path):
 
 
 def test_root_attributes(ds):
-    assert ds.attrs["studyrun_file_format"] == 1
+    assert ds.attrs["studyrun_file_format"] == 2
     for key in ("Conventions", "studyrun_version", "git_commit", "created"):
         assert isinstance(ds.attrs.get(key), str), key
 

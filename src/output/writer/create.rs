@@ -125,11 +125,7 @@ impl Creator<'_> {
     /// Creates every dimension and variable of the layout, with the root attributes.
     pub(super) fn build(&self) -> Result<(), StudyFileError> {
         let l = self.layout;
-        attributes::write(self.file, FORMAT_ATTR, &FORMAT_VERSION.into())
-            .at(self.path, FORMAT_ATTR)?;
-        for (name, value) in &l.attributes {
-            attributes::write(self.file, name, value).at(self.path, name)?;
-        }
+        self.root_attributes()?;
         let (case, time, frequency, reference) = self.coordinates()?;
 
         for p in &l.parameters {
@@ -201,6 +197,19 @@ impl Creator<'_> {
             self.array(spec, Role::ReferenceSeries, &reference, time)?;
         }
         Ok(())
+    }
+
+    /// The format version, the layout's root attributes and the digest of its
+    /// variables' names and roles.
+    fn root_attributes(&self) -> Result<(), StudyFileError> {
+        attributes::write(self.file, FORMAT_ATTR, &FORMAT_VERSION.into())
+            .at(self.path, FORMAT_ATTR)?;
+        for (name, value) in &self.layout.attributes {
+            attributes::write(self.file, name, value).at(self.path, name)?;
+        }
+        let digest = text::variables_digest(self.layout);
+        attributes::write(self.file, VARIABLES_DIGEST_ATTR, &digest.into())
+            .at(self.path, VARIABLES_DIGEST_ATTR)
     }
 
     /// The `[case, dim]` variables `specs` (`len` columns), float64, checksummed in
@@ -395,11 +404,14 @@ impl Creator<'_> {
         if let Some(role) = role {
             attributes::write_str(ds, ROLE_ATTR, role.as_str()).at(self.path, name)?;
         }
-        let described = [
-            spec.units.as_str(),
-            &spec.long_name,
-            role.map_or("", Role::as_str),
-        ];
+        let described = text::digested(
+            &[
+                spec.units.as_str(),
+                &spec.long_name,
+                role.map_or("", Role::as_str),
+            ],
+            &spec.attributes,
+        );
         text::write_digest(ds, text::ATTRIBUTES_DIGEST_ATTR, &described).at(self.path, name)
     }
 }

@@ -17,15 +17,17 @@ use super::layout::{
     Layout, Param, ParamValues, Role, Status, VarSpec, CASE, ERROR_MESSAGE, FORMAT_ATTR,
     FORMAT_VERSION, FREQUENCY, ORDER, REFERENCE, REFERENCE_INDEX, REPLICATE,
     REPLICATE_ERROR_MESSAGE, REPLICATE_STATUS, REVOLUTION, ROLE_ATTR, SK_FREQUENCY, STATUS, TIME,
-    TIME_UNITS,
+    TIME_UNITS, VARIABLES_DIGEST_ATTR,
 };
-use super::reader::{read_layout, read_messages, StudyReader};
+use super::reader::{read_layout, StudyReader};
 use super::reserve::Reservation;
 use super::text;
 
 mod create;
+mod scalars;
 
 use create::*;
+use scalars::Scalars;
 
 /// One finished (or failed) case, borrowed from the caller.
 ///
@@ -116,10 +118,11 @@ impl Row for [u8] {
 /// Series, spectra and reference series are written with HDF5's direct chunk write:
 /// a row is one chunk, encoded (float32 conversion, shuffle, deflate) by a
 /// [`ChunkEncoder`], here or by the caller, and copied into the file as it is. The
-/// per-case scalars (metrics, status, error message) are kept in memory, a few bytes
-/// per case and variable, and written one variable at a time by
-/// [`StudyWriter::flush`] and [`StudyWriter::finish`] (or, best effort, when the
-/// writer is dropped): a file whose writer never flushed shows every case pending.
+/// per-case metrics are held until a window of them is full, then written in runs of
+/// consecutive rows; statuses (a byte per case) and the non-empty messages are
+/// written by [`StudyWriter::flush`] and [`StudyWriter::finish`] (or, best effort,
+/// when the writer is dropped): a file whose writer never flushed shows every case
+/// pending (see `writer::scalars`).
 ///
 /// HDF5's metadata cache is bounded to 512 KiB, so that memory does not grow with
 /// the number of chunks (the chunk index's B-tree nodes are several
@@ -142,144 +145,6 @@ pub struct StudyWriter {
 /// entries: their size on disk).
 const METADATA_CACHE_BYTES: usize = 512 * 1024;
 
-/// `replicate_status` and `replicate_error_message`: their datasets and values,
-/// row-major, and the number of replicates.
-struct ReplicateScalars {
-    status: (Dataset, Vec<i8>),
-    messages: (Dataset, Vec<String>),
-    width: usize,
-}
-
-/// The `[case]` scalars and `[case, replicate]` and `[case, revolution]` metrics of
-/// every row, written whole by [`Scalars::write`].
-struct Scalars {
-    path: PathBuf,
-    /// Per metric, then per replicate and per revolution metric: its dataset, its
-    /// values in row-major order, and the values per case (1, or the number of
-    /// replicates or revolutions).
-    metrics: Vec<(Dataset, Vec<f64>, usize)>,
-    status: (Dataset, Vec<i8>),
-    messages: (Dataset, Vec<String>),
-    /// In a file with replicates: `replicate_status` and `replicate_error_message`.
-    replicates: Option<ReplicateScalars>,
-    /// Something changed since the last write.
-    dirty: bool,
-}
-
-impl Scalars {
-    /// The scalars as the file holds them now (NaN, pending and empty in a new file).
-    fn read(rows: &RowDatasets, layout: &Layout, path: &Path) -> Result<Self, StudyFileError> {
-        let n_replicates = layout.replicates.len();
-        let metrics = rows
-            .metrics
-            .iter()
-            .zip(&layout.metrics)
-            .map(|m| (m, 1))
-            .chain(
-                rows.replicate_metrics
-                    .iter()
-                    .zip(&layout.replicate_metrics)
-                    .map(|m| (m, n_replicates)),
-            )
-            .chain(
-                rows.revolution_metrics
-                    .iter()
-                    .zip(&layout.revolution_metrics)
-                    .map(|m| (m, layout.revolutions.len())),
-            )
-            .chain(
-                rows.order_spectra
-                    .iter()
-                    .zip(&layout.order_spectra)
-                    .map(|m| (m, layout.orders.len())),
-            )
-            .map(|((ds, spec), width)| {
-                Ok((
-                    ds.clone(),
-                    ds.read_raw::<f64>().at(path, &spec.name)?,
-                    width,
-                ))
-            })
-            .collect::<Result<_, StudyFileError>>()?;
-        let status = rows.status.read_raw::<i8>().at(path, STATUS)?;
-        let messages = read_messages(&rows.error_message, layout.n_cases(), path)?;
-        let replicates = match &rows.replicates {
-            Some((status, messages)) => {
-                let n = layout.n_cases() * n_replicates;
-                let codes = status.read_raw::<i8>().at(path, REPLICATE_STATUS)?;
-                let texts = read_messages(messages, n, path)?;
-                Some(ReplicateScalars {
-                    status: (status.clone(), codes),
-                    messages: (messages.clone(), texts),
-                    width: n_replicates,
-                })
-            }
-            None => None,
-        };
-        Ok(Self {
-            path: path.to_owned(),
-            metrics,
-            status: (rows.status.clone(), status),
-            messages: (rows.error_message.clone(), messages),
-            replicates,
-            dirty: false,
-        })
-    }
-
-    /// Records row `row`'s metrics (if any, laid out as [`Record::metrics`]),
-    /// status and messages.
-    fn set<R: ?Sized>(&mut self, row: usize, record: &Record<'_, R>) {
-        let (metrics, status, message) = (record.metrics, record.status, record.message);
-        if !metrics.is_empty() {
-            let mut at = 0;
-            for (_, column, width) in &mut self.metrics {
-                column[row * *width..(row + 1) * *width].copy_from_slice(&metrics[at..at + *width]);
-                at += *width;
-            }
-        }
-        self.status.1[row] = status.code();
-        self.messages.1[row] = message.replace('\0', "\u{FFFD}");
-        if let Some(r) = &mut self.replicates {
-            let width = r.width;
-            for k in 0..width {
-                let (state, text) = match status {
-                    Status::Ok => match record.replicate_messages.get(k) {
-                        Some(m) if !m.is_empty() => (Status::Failed, m.as_str()),
-                        _ => (Status::Ok, ""),
-                    },
-                    Status::Failed if k == 0 => (Status::Failed, message),
-                    _ => (Status::Pending, ""),
-                };
-                r.status.1[row * width + k] = state.code();
-                r.messages.1[row * width + k] = text.replace('\0', "\u{FFFD}");
-            }
-        }
-        self.dirty = true;
-    }
-
-    /// Writes every scalar variable whole if anything changed; the status last.
-    fn write(&mut self) -> Result<(), StudyFileError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        let path = &self.path;
-        for (ds, values, _) in &self.metrics {
-            ds.write_raw(values).at(path, &ds.name())?;
-        }
-        if let Some(r) = &self.replicates {
-            write_strings(&r.messages.0, &r.messages.1).at(path, REPLICATE_ERROR_MESSAGE)?;
-            r.status
-                .0
-                .write_raw(&r.status.1)
-                .at(path, REPLICATE_STATUS)?;
-        }
-        write_strings(&self.messages.0, &self.messages.1).at(path, ERROR_MESSAGE)?;
-        self.status.0.write_raw(&self.status.1).at(path, STATUS)?;
-        self.dirty = false;
-        Ok(())
-    }
-}
-
 /// Writes `texts` into the string variable `ds` whole, with their digest.
 pub(super) fn write_strings(ds: &Dataset, texts: &[String]) -> hdf5::Result<()> {
     let values = texts
@@ -288,13 +153,6 @@ pub(super) fn write_strings(ds: &Dataset, texts: &[String]) -> hdf5::Result<()> 
         .collect::<hdf5::Result<Vec<_>>>()?;
     ds.write_raw(&values)?;
     text::write_digest(ds, text::DIGEST_ATTR, texts)
-}
-
-impl Drop for Scalars {
-    /// Writes what [`StudyWriter::finish`] did not (errors cannot be reported here).
-    fn drop(&mut self) {
-        let _ = self.write();
-    }
 }
 
 impl std::fmt::Debug for StudyWriter {
@@ -425,7 +283,7 @@ impl StudyWriter {
             encoder.encode(values, chunk);
             write_row_chunk(ds, row, chunk).at(path, &spec.name)?;
         }
-        self.scalars.set(row, record);
+        self.scalars.set(row, record)?;
         Ok(())
     }
 
@@ -447,7 +305,7 @@ impl StudyWriter {
         for (chunk, ds, spec) in case_arrays(&self.rows, &self.layout, record) {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
-        self.scalars.set(row, record);
+        self.scalars.set(row, record)?;
         Ok(before)
     }
 

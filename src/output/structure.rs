@@ -1,14 +1,16 @@
-//! The chunk index of a study file, checked against what the file's statuses say was
-//! written.
+//! What HDF5 does not checksum in a study file, checked against what it must be.
 //!
-//! HDF5 checksums every chunk (Fletcher-32) but not the index that finds them (a
-//! version 1 B-tree): a damaged index can lose a chunk, which then reads as the fill
-//! value without an error. [`check`] looks up every chunk the file must hold (one
-//! B-tree lookup each, `H5Dget_chunk_storage_size`) and refuses one the index lacks.
+//! HDF5 checksums every chunk (Fletcher-32) but neither the index that finds them (a
+//! version 1 B-tree) nor a variable's datatype. A damaged index can lose a chunk,
+//! which then reads as the fill value without an error: [`check_chunks`] looks up
+//! every chunk the file must hold (one B-tree lookup each,
+//! `H5Dget_chunk_storage_size`) and refuses one the index lacks. A damaged datatype
+//! (an exponent bias, a byte order) converts intact bytes into other numbers:
+//! [`check_numeric_type`] accepts only the standard little-endian types.
 
 use std::collections::HashMap;
 
-use hdf5::{Dataset, File};
+use hdf5::{Dataset, Datatype, File, H5Type};
 use hdf5_sys::h5::{herr_t, hsize_t};
 use hdf5_sys::h5i::hid_t;
 
@@ -88,7 +90,7 @@ fn stored(ds: &Dataset, coordinate: &[hsize_t]) -> bool {
 /// rows have `statuses`: the rows of ok cases in every `[case, ...]` variable, those of
 /// finished cases (ok or failed: their metrics and statuses were written) in the
 /// metric variables, the references of ok cases, and every chunk of the rest.
-pub(super) fn check(
+pub(super) fn check_chunks(
     file: &File,
     layout: &Layout,
     rows: &RowDatasets,
@@ -134,4 +136,29 @@ pub(super) fn check(
         check_dataset(&ds, &name, &rule)?;
     }
     Ok(())
+}
+
+/// Checks that the numeric variable `ds` has one of the standard little-endian
+/// datatypes studyrun and netCDF tools write (IEEE floats, two's-complement integers
+/// of 1 to 8 bytes).
+pub(super) fn check_numeric_type(ds: &Dataset) -> Result<(), String> {
+    fn is<T: H5Type>(dtype: &Datatype) -> bool {
+        Datatype::from_type::<T>().is_ok_and(|t| &t == dtype)
+    }
+    let dtype = ds.dtype().map_err(|e| e.to_string())?;
+    let standard = is::<f64>(&dtype)
+        || is::<f32>(&dtype)
+        || is::<i8>(&dtype)
+        || is::<u8>(&dtype)
+        || is::<i16>(&dtype)
+        || is::<u16>(&dtype)
+        || is::<i32>(&dtype)
+        || is::<u32>(&dtype)
+        || is::<i64>(&dtype)
+        || is::<u64>(&dtype);
+    if standard {
+        Ok(())
+    } else {
+        Err("its datatype is none of the standard little-endian floats and integers".into())
+    }
 }
