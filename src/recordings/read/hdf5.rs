@@ -1,0 +1,158 @@
+//! HDF5 files, netCDF-4 files (which are HDF5) and MATLAB v7.3 MAT-files (HDF5
+//! with a 512-byte user block), read through libhdf5.
+//!
+//! A variable is a dataset path (`DE`, `group/DE`); any integer or float dataset of
+//! one column is read, converted to `f64` by libhdf5. Without a variable the file's
+//! only numeric dataset is read. MATLAB's bookkeeping groups `#refs#` and
+//! `#subsystem#` are not searched.
+
+use std::path::Path;
+
+use hdf5::types::TypeDescriptor;
+use hdf5::{Dataset, File, Group};
+
+use super::bytes::inflated_bound;
+use super::{listed, Fault, Loaded, ReadError};
+
+/// Groups nested deeper than this are not searched (a hard link may close a cycle).
+const MAX_DEPTH: usize = 32;
+
+/// The first bytes of a netCDF-3 (classic, 64-bit offset, 64-bit data) file.
+const NETCDF3: [&[u8]; 3] = [b"CDF\x01", b"CDF\x02", b"CDF\x05"];
+
+/// Reads dataset `variable` of the HDF5 file at `path` (its only numeric dataset
+/// when `None`).
+pub(super) fn read(path: &Path, variable: Option<&str>) -> Result<Loaded, ReadError> {
+    let at = |f: Fault| f.at(path);
+    let hdf5_error = |name: &str, source| ReadError::Hdf5 {
+        path: path.to_owned(),
+        name: name.to_string(),
+        source,
+    };
+    let file = File::open(path).map_err(|e| match opening_fault(path, &e) {
+        Some(f) => at(f),
+        None => hdf5_error("/", e),
+    })?;
+    let (name, ds) = match variable {
+        Some(v) => {
+            let v = v.trim_start_matches('/');
+            let ds = file.dataset(v).map_err(|_| {
+                let held = datasets(&file).unwrap_or_default();
+                at(Fault::Select(format!(
+                    "no dataset `{v}`; it holds {}",
+                    listed(&held)
+                )))
+            })?;
+            (v.to_string(), ds)
+        }
+        None => only_numeric(&file, path)?,
+    };
+    let dtype = ds.dtype().and_then(|t| t.to_descriptor());
+    match dtype.map_err(|e| hdf5_error(&name, e))? {
+        TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_) | TypeDescriptor::Float(_) => {}
+        other => {
+            return Err(at(Fault::Unsupported(format!(
+                "`{name}` is of type {other}; integer and float datasets are read"
+            ))))
+        }
+    }
+    let shape = ds.shape();
+    let n = match shape[..] {
+        [n] | [n, 1] | [1, n] => n,
+        _ => {
+            let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+            let shape = format!("({})", dims.join(", "));
+            return Err(at(Fault::Shape(name, shape)));
+        }
+    };
+    let file_len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let bound = inflated_bound(usize::try_from(file_len).unwrap_or(usize::MAX));
+    if n > bound {
+        return Err(at(Fault::Corrupt(format!(
+            "`{name}` declares {n} elements, more than a {file_len}-byte file can store"
+        ))));
+    }
+    let values = ds.read_raw::<f64>().map_err(|e| hdf5_error(&name, e))?;
+    Ok(Loaded {
+        name,
+        values,
+        sample_rate: None,
+    })
+}
+
+/// What to say when libhdf5 cannot open the file: not HDF5 at all, or netCDF-3.
+fn opening_fault(path: &Path, error: &hdf5::Error) -> Option<Fault> {
+    if !error.to_string().contains("signature") {
+        return None;
+    }
+    let mut head = [0; 4];
+    let netcdf3 = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok()
+        && NETCDF3.contains(&&head[..]);
+    Some(if netcdf3 {
+        Fault::Unsupported(
+            "a netCDF-3 (classic) file; netCDF-4 files, which are HDF5, are read".into(),
+        )
+    } else {
+        Fault::Corrupt("not an HDF5 file (no HDF5 signature)".into())
+    })
+}
+
+/// The file's only integer or float dataset, or an error listing them all.
+fn only_numeric(file: &File, path: &Path) -> Result<(String, Dataset), ReadError> {
+    let hdf5_error = |source| ReadError::Hdf5 {
+        path: path.to_owned(),
+        name: "/".into(),
+        source,
+    };
+    let names = datasets(file).map_err(hdf5_error)?;
+    let mut numeric = Vec::new();
+    for name in &names {
+        let ds = file.dataset(name).map_err(hdf5_error)?;
+        let kind = ds
+            .dtype()
+            .and_then(|t| t.to_descriptor())
+            .map_err(hdf5_error)?;
+        if matches!(
+            kind,
+            TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_) | TypeDescriptor::Float(_)
+        ) {
+            numeric.push((name.clone(), ds));
+        }
+    }
+    if numeric.len() == 1 {
+        return Ok(numeric.remove(0));
+    }
+    let what = match numeric.len() {
+        0 => "no numeric dataset".to_string(),
+        n => format!("{n} numeric datasets"),
+    };
+    let reason = format!("{what}; choose a variable among {}", listed(&names));
+    Err(Fault::Select(reason).at(path))
+}
+
+/// The paths of every dataset in the file, without the leading `/`.
+fn datasets(file: &File) -> hdf5::Result<Vec<String>> {
+    let mut out = Vec::new();
+    collect(file, 0, &mut out)?;
+    Ok(out)
+}
+
+/// Appends the datasets of `group` and its subgroups to `out`.
+fn collect(group: &Group, depth: usize, out: &mut Vec<String>) -> hdf5::Result<()> {
+    for ds in group.datasets()? {
+        out.push(ds.name().trim_start_matches('/').to_string());
+    }
+    if depth >= MAX_DEPTH {
+        return Ok(());
+    }
+    for g in group.groups()? {
+        let name = g.name();
+        let last = name.rsplit('/').next().unwrap_or_default();
+        if last != "#refs#" && last != "#subsystem#" {
+            collect(&g, depth + 1, out)?;
+        }
+    }
+    Ok(())
+}
