@@ -150,3 +150,121 @@ fn fields(line: &str, delimiter: char) -> Vec<Cow<'_, str>> {
     out.push(Cow::Owned(field.trim().to_string()));
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn by_name(text: &str, name: &str) -> Result<Loaded, Fault> {
+        read(text.as_bytes(), Some(&ColumnRef::Name(name.into())))
+    }
+
+    fn by_index(text: &str, i: usize) -> Result<Loaded, Fault> {
+        read(text.as_bytes(), Some(&ColumnRef::Index(i)))
+    }
+
+    const WITH_HEADER: &str = "time,DE\n0,1.5\n0.001,-2\n0.002,3e-3\n";
+
+    #[test]
+    fn a_column_reads_by_header_name_or_index() {
+        let named = by_name(WITH_HEADER, "DE").unwrap();
+        assert_eq!(
+            (named.name.as_str(), &named.values[..]),
+            ("DE", &[1.5, -2.0, 3e-3][..])
+        );
+        let indexed = by_index(WITH_HEADER, 1).unwrap();
+        assert_eq!(
+            (indexed.name.as_str(), indexed.values),
+            ("DE", vec![1.5, -2.0, 3e-3])
+        );
+        assert_eq!(
+            by_index(WITH_HEADER, 0).unwrap().values,
+            [0.0, 0.001, 0.002]
+        );
+    }
+
+    #[test]
+    fn without_a_header_every_line_is_data() {
+        let read_back = by_index("1,2\n3,4\n", 1).unwrap();
+        assert_eq!(
+            (read_back.name.as_str(), read_back.values),
+            ("column 1", vec![2.0, 4.0])
+        );
+        assert_eq!(
+            read("7\n-8\n".as_bytes(), None).unwrap().values,
+            [7.0, -8.0]
+        );
+        assert_eq!(
+            read("x\n7\n-8\n".as_bytes(), None).unwrap().values,
+            [7.0, -8.0]
+        );
+    }
+
+    #[test]
+    fn semicolons_and_tabs_separate_when_the_first_line_has_no_comma() {
+        assert_eq!(by_name("a;b\n1;2\n3;4\n", "b").unwrap().values, [2.0, 4.0]);
+        assert_eq!(
+            by_name("a\tb\n1\t2\n3\t4\n", "b").unwrap().values,
+            [2.0, 4.0]
+        );
+    }
+
+    #[test]
+    fn empty_lines_crlf_spaces_quotes_and_a_bom_are_handled() {
+        let text = "\u{feff}\"t\", \"DE, raw\"\r\n\r\n0, 5\r\n\r\n1,\"-6\"\r\n";
+        let read_back = by_name(text, "DE, raw").unwrap();
+        assert_eq!(read_back.values, [5.0, -6.0]);
+        assert_eq!(
+            by_name("\"a\"\"b\",c\n1,2\n", "a\"b").unwrap().values,
+            [1.0]
+        );
+    }
+
+    #[test]
+    fn a_cell_that_is_not_a_number_names_its_line() {
+        let Err(Fault::Corrupt(m)) = by_name("x,y\n1,2\n\n3,abc\n", "y") else {
+            panic!("a text cell was read");
+        };
+        assert_eq!(m, "line 4: `abc` in column `y` is not a number");
+        let Err(Fault::Corrupt(m)) = by_name("x,y\n1,2\n3\n", "y") else {
+            panic!("a short row was read");
+        };
+        assert_eq!(m, "line 3 has 1 field(s), no column 1 (`y`)");
+    }
+
+    #[test]
+    fn a_wrong_column_lists_what_there_is() {
+        let Err(Fault::Select(m)) = by_name(WITH_HEADER, "FE") else {
+            panic!("a missing column was read");
+        };
+        assert_eq!(m, "no column `FE`; the header names time, DE");
+        let Err(Fault::Select(m)) = by_name("1,2\n", "FE") else {
+            panic!("a column was found by name without a header");
+        };
+        assert!(m.contains("not a header") && m.contains("0..=1"), "{m}");
+        let Err(Fault::Select(m)) = by_index(WITH_HEADER, 2) else {
+            panic!("column 2 of 2 was read");
+        };
+        assert_eq!(m, "no column 2: line 1 has 2 column(s), 0..=1");
+        let Err(Fault::Select(m)) = read(WITH_HEADER.as_bytes(), None) else {
+            panic!("one of two columns was read without a selector");
+        };
+        assert_eq!(
+            m,
+            "2 columns (time, DE); choose one by name or by index 0..=1"
+        );
+    }
+
+    #[test]
+    fn nothing_to_read_is_empty_and_binary_is_refused() {
+        assert_eq!(
+            read(b"\n \n", None).unwrap_err(),
+            Fault::Empty("the CSV file".into())
+        );
+        assert_eq!(by_name("DE\n", "DE").unwrap().values, Vec::<f64>::new());
+        assert!(matches!(
+            read(b"1,2\n\xff\xfe", None),
+            Err(Fault::Corrupt(_))
+        ));
+    }
+}

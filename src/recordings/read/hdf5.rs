@@ -156,3 +156,112 @@ fn collect(group: &Group, depth: usize, out: &mut Vec<String>) -> hdf5::Result<(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes `name` as `shape` holding `values` into `file`.
+    fn dataset<T: hdf5::H5Type>(file: &Group, name: &str, shape: &[usize], values: &[T]) {
+        file.new_dataset::<T>()
+            .shape(shape)
+            .create(name)
+            .and_then(|ds| ds.write_raw(values))
+            .unwrap();
+    }
+
+    /// A file with `DE` (f64, N), `g/FE` (i16, N x 1), `row` (f32, 1 x N), `m` (2 x 3).
+    fn fixture(dir: &Path) -> std::path::PathBuf {
+        let path = dir.join("rig.h5");
+        let file = File::create(&path).unwrap();
+        dataset(&file, "DE", &[4], &[0.5, -1.25, 3.0, 1e-9]);
+        let g = file.create_group("g").unwrap();
+        dataset(&g, "FE", &[3, 1], &[-32768i16, 0, 32767]);
+        dataset(&file, "row", &[1, 2], &[0.25f32, -8.0]);
+        dataset(&file, "m", &[2, 3], &[1.0; 6]);
+        path
+    }
+
+    #[test]
+    fn float_and_integer_datasets_of_one_column_read_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = fixture(dir.path());
+        let de = read(&path, Some("DE")).unwrap();
+        assert_eq!(
+            (de.name.as_str(), de.values),
+            ("DE", vec![0.5, -1.25, 3.0, 1e-9])
+        );
+        assert_eq!(
+            read(&path, Some("g/FE")).unwrap().values,
+            [-32768.0, 0.0, 32767.0]
+        );
+        assert_eq!(
+            read(&path, Some("/g/FE")).unwrap().values,
+            [-32768.0, 0.0, 32767.0]
+        );
+        assert_eq!(read(&path, Some("row")).unwrap().values, [0.25, -8.0]);
+    }
+
+    #[test]
+    fn a_missing_dataset_or_no_variable_lists_the_datasets() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = fixture(dir.path());
+        let err = read(&path, Some("g/DE")).unwrap_err().to_string();
+        assert!(
+            err.ends_with("no dataset `g/DE`; it holds DE, m, row, g/FE"),
+            "{err}"
+        );
+        let err = read(&path, None).unwrap_err().to_string();
+        assert!(
+            err.ends_with("4 numeric datasets; choose a variable among DE, m, row, g/FE"),
+            "{err}"
+        );
+        let one = dir.path().join("one.nc");
+        dataset(&File::create(&one).unwrap(), "x", &[2], &[1u8, 2]);
+        assert_eq!(read(&one, None).unwrap().values, [1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_table_is_refused_naming_its_shape() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = read(&fixture(dir.path()), Some("m")).unwrap_err();
+        assert!(
+            matches!(err, ReadError::Shape { ref shape, .. } if shape == "(2, 3)"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn files_that_are_not_hdf5_are_named_as_such() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = dir.path().join("text.h5");
+        std::fs::write(&text, "time,DE\n").unwrap();
+        let err = read(&text, Some("DE")).unwrap_err();
+        assert!(err.to_string().contains("not an HDF5 file"), "{err}");
+        let classic = dir.path().join("classic.nc");
+        std::fs::write(&classic, b"CDF\x01\0\0\0\0").unwrap();
+        let err = read(&classic, None).unwrap_err();
+        assert!(matches!(err, ReadError::Unsupported { .. }), "{err}");
+        assert!(err.to_string().contains("netCDF-3"), "{err}");
+    }
+
+    #[test]
+    fn a_mat_v73_file_reads_struct_fields_through_hdf5() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("v73.mat");
+        let file = File::with_options()
+            .with_fcpl(|p| p.userblock(512))
+            .create(&path)
+            .unwrap();
+        let bearing = file.create_group("bearing").unwrap();
+        // MATLAB stores an N x 1 column as an HDF5 dataset of shape (1, N).
+        dataset(&bearing, "gs", &[1, 3], &[0.5, 0.25, -1.0]);
+        drop((bearing, file));
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[..19].copy_from_slice(b"MATLAB 7.3 MAT-file");
+        std::fs::write(&path, bytes).unwrap();
+        let selector = super::super::Selector::Variable("bearing.gs".into());
+        let samples = super::super::read_samples(&path, &selector).unwrap();
+        assert_eq!(samples.values, [0.5, 0.25, -1.0]);
+    }
+}

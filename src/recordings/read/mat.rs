@@ -453,3 +453,194 @@ fn numbers(real: Element, dims: &[usize], endian: Endian, path: &str) -> Result<
     }
     Ok(decode(real.data, number, endian))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::fixtures::{self as f, Mat};
+    use super::*;
+
+    const LE: Mat = Mat(Endian::Little);
+    const BE: Mat = Mat(Endian::Big);
+
+    /// A MAT-file of `elements` after `w`'s header.
+    fn file(w: Mat, elements: &[Vec<u8>]) -> Vec<u8> {
+        let mut out = w.header();
+        for e in elements {
+            out.extend(e);
+        }
+        out
+    }
+
+    fn values(data: &[u8], variable: &str) -> Vec<f64> {
+        read(data, Some(variable)).unwrap().values
+    }
+
+    /// `bearing` (compressed): `gs` of class double stored as `miINT16`, scalar
+    /// `sr`, and `rate` stored as `miUINT8`.
+    fn bearing(w: Mat) -> Vec<u8> {
+        let gs: Vec<u8> = [-3i16, 0, 7, 32000]
+            .iter()
+            .flat_map(|&v| match w.0 {
+                Endian::Little => v.to_le_bytes(),
+                Endian::Big => v.to_be_bytes(),
+            })
+            .collect();
+        let gs = w.matrix(f::MX_DOUBLE, &[4, 1], "", &w.element(f::MI_INT16, &gs));
+        let rate = w.matrix(f::MX_DOUBLE, &[1, 1], "", &w.element(f::MI_UINT8, &[200]));
+        let fields = [
+            ("gs", gs),
+            ("sr", w.doubles("", &[12_000.0])),
+            ("rate", rate),
+        ];
+        w.compressed(&w.structure("bearing", &fields))
+    }
+
+    #[test]
+    fn an_uncompressed_double_vector_reads_exactly() {
+        let x = [0.5, -1.25, 1e-300, 7.0e200, 0.0];
+        let data = file(LE, &[LE.doubles("x", &x)]);
+        assert_eq!(values(&data, "x"), x);
+        assert_eq!(read(&data, None).unwrap().values, x);
+        let row = LE.matrix(
+            f::MX_DOUBLE,
+            &[1, 2],
+            "row",
+            &LE.element(f::MI_DOUBLE, &[0; 16]),
+        );
+        assert_eq!(values(&file(LE, &[row]), "row"), [0.0, 0.0]);
+    }
+
+    #[test]
+    fn compressed_struct_fields_read_through_their_path() {
+        let data = file(LE, &[bearing(LE), LE.doubles("x", &[1.0])]);
+        assert_eq!(values(&data, "bearing.gs"), [-3.0, 0.0, 7.0, 32000.0]);
+        assert_eq!(values(&data, "bearing.sr"), [12_000.0]);
+        assert_eq!(values(&data, "bearing.rate"), [200.0]);
+        let Err(Fault::Select(m)) = read(&data, Some("bearing.gx")) else {
+            panic!("a missing field was read");
+        };
+        assert_eq!(
+            m,
+            "no variable `bearing.gx`; it holds bearing.gs, bearing.sr, bearing.rate, x"
+        );
+        let Err(Fault::Select(m)) = read(&data, Some("bearing")) else {
+            panic!("a struct was read as samples");
+        };
+        assert!(
+            m.ends_with("fields: bearing.gs, bearing.sr, bearing.rate"),
+            "{m}"
+        );
+        // `x` is the only numeric variable at top level.
+        assert_eq!(read(&data, None).unwrap().values, [1.0]);
+    }
+
+    #[test]
+    fn nested_structs_and_empty_fields() {
+        let inner = LE.structure("", &[("c", LE.doubles("", &[4.0, 5.0]))]);
+        let empty = [f::MI_MATRIX.to_le_bytes(), [0; 4]].concat();
+        let data = file(LE, &[LE.structure("a", &[("b", inner), ("e", empty)])]);
+        assert_eq!(values(&data, "a.b.c"), [4.0, 5.0]);
+        assert_eq!(
+            read(&data, Some("a.e")).unwrap_err(),
+            Fault::Empty("a.e".into())
+        );
+        let Err(Fault::Select(m)) = read(&data, None) else {
+            panic!("a struct was read without a variable");
+        };
+        assert_eq!(
+            m,
+            "no numeric variable at top level; choose a variable among a.b.c, a.e"
+        );
+    }
+
+    #[test]
+    fn a_big_endian_file_reads_the_same() {
+        let ints: Vec<u8> = [-70_000i32, 3]
+            .iter()
+            .flat_map(|&v| BE.u32(v as u32))
+            .collect();
+        let i32s = BE.matrix(f::MX_INT32, &[2, 1], "n", &BE.element(f::MI_INT32, &ints));
+        let data = file(
+            BE,
+            &[BE.doubles("x", &[0.5, -2.0, 1e10]), i32s, bearing(BE)],
+        );
+        assert_eq!(values(&data, "x"), [0.5, -2.0, 1e10]);
+        assert_eq!(values(&data, "n"), [-70_000.0, 3.0]);
+        assert_eq!(values(&data, "bearing.gs"), [-3.0, 0.0, 7.0, 32000.0]);
+        let Err(Fault::Select(m)) = read(&data, None) else {
+            panic!("one of two numeric variables was read without a name");
+        };
+        assert!(m.starts_with("2 numeric variables at top level"), "{m}");
+    }
+
+    #[test]
+    fn complex_cell_char_and_tables_are_refused_by_name() {
+        let z = LE.matrix(
+            f::MX_DOUBLE | f::COMPLEX,
+            &[1, 1],
+            "z",
+            &[
+                LE.element(f::MI_DOUBLE, &[0; 8]),
+                LE.element(f::MI_DOUBLE, &[0; 8]),
+            ]
+            .concat(),
+        );
+        let cell = LE.matrix(f::MX_CELL, &[1, 1], "c", &LE.doubles("", &[1.0]));
+        let text = LE.matrix(f::MX_CHAR, &[1, 2], "s", &LE.element(f::MI_UINT8, b"hi"));
+        let table = LE.matrix(
+            f::MX_DOUBLE,
+            &[2, 3],
+            "m",
+            &LE.element(f::MI_DOUBLE, &[0; 48]),
+        );
+        let data = file(LE, &[z, cell, text, table]);
+        for (name, says) in [
+            ("z", "`z` is complex"),
+            ("c", "`c` is a cell array"),
+            ("s", "`s` is a char array"),
+        ] {
+            let Err(Fault::Unsupported(m)) = read(&data, Some(name)) else {
+                panic!("{name} was read");
+            };
+            assert!(m.starts_with(says), "{m}");
+        }
+        assert_eq!(
+            read(&data, Some("m")).unwrap_err(),
+            Fault::Shape("m".into(), "2x3".into())
+        );
+    }
+
+    #[test]
+    fn corrupt_or_truncated_files_are_refused() {
+        let data = file(LE, &[bearing(LE), LE.doubles("x", &[1.0, 2.0])]);
+        for cut in 0..data.len() {
+            // Cut anywhere, the file is refused or (cut after `bearing`) lacks `x`.
+            assert!(read(&data[..cut], Some("x")).is_err(), "cut at {cut}");
+        }
+        // Dimensions that say 3 values over 2 stored.
+        let lying = LE.matrix(
+            f::MX_DOUBLE,
+            &[3, 1],
+            "y",
+            &LE.element(f::MI_DOUBLE, &[0; 16]),
+        );
+        let Err(Fault::Corrupt(m)) = read(&file(LE, &[lying]), Some("y")) else {
+            panic!("a short array was read");
+        };
+        assert_eq!(m, "`y` is 3x1 but holds 16 bytes of 8-byte elements");
+        // A byte flipped inside the zlib stream fails its checks.
+        let mut flipped = file(LE, &[bearing(LE)]);
+        let middle = 128 + 8 + (flipped.len() - 136) / 2;
+        flipped[middle] ^= 0x55;
+        assert!(matches!(
+            read(&flipped, Some("bearing.gs")),
+            Err(Fault::Corrupt(_))
+        ));
+        let mut v4 = data;
+        v4[126..128].copy_from_slice(b"\0\0");
+        let Err(Fault::Corrupt(m)) = read(&v4, None) else {
+            panic!("a file without an endian indicator was read");
+        };
+        assert!(m.contains("Level 5"), "{m}");
+    }
+}

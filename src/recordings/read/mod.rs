@@ -19,9 +19,13 @@
 
 mod bytes;
 mod csv;
+#[cfg(test)]
+mod fixtures;
 mod hdf5;
 mod mat;
 mod npy;
+#[cfg(test)]
+mod tests;
 mod wav;
 mod zip;
 

@@ -170,3 +170,147 @@ fn parse_fmt(body: &[u8]) -> Result<Fmt, Fault> {
     }
     Ok(fmt)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::fixtures::{bytes, wav, FLOAT, PCM};
+    use super::*;
+
+    fn channel(file: &[u8], i: Option<usize>) -> Vec<f64> {
+        read(file, i).unwrap().values
+    }
+
+    #[test]
+    fn pcm16_stereo_reads_each_channel_scaled_with_the_rate() {
+        let frames: [i16; 6] = [1000, -1000, -32768, 32767, 0, 1];
+        let file = wav(PCM, false, 2, 8000, 16, &bytes(&frames, i16::to_le_bytes));
+        let left = read(&file, Some(0)).unwrap();
+        assert_eq!(left.values, [1000.0 / 32768.0, -1.0, 0.0]);
+        assert_eq!(left.sample_rate, Some(8000.0));
+        assert_eq!(left.name, "channel 0");
+        let right = [-1000.0 / 32768.0, 32767.0 / 32768.0, 1.0 / 32768.0];
+        assert_eq!(channel(&file, Some(1)), right);
+    }
+
+    #[test]
+    fn pcm8_24_and_32_scale_to_unit_range() {
+        let file = wav(PCM, false, 1, 100, 8, &[0, 128, 255]);
+        assert_eq!(channel(&file, None), [-1.0, 0.0, 127.0 / 128.0]);
+        let v24: [i32; 4] = [-8_388_608, 8_388_607, 1, -1];
+        let data: Vec<u8> = v24
+            .iter()
+            .flat_map(|v| v.to_le_bytes()[..3].to_vec())
+            .collect();
+        let file = wav(PCM, false, 1, 44_100, 24, &data);
+        let scaled: Vec<f64> = v24.iter().map(|&v| f64::from(v) / 8_388_608.0).collect();
+        assert_eq!(channel(&file, None), scaled);
+        let file = wav(
+            PCM,
+            false,
+            1,
+            1,
+            32,
+            &bytes(&[i32::MIN, 1 << 30], i32::to_le_bytes),
+        );
+        assert_eq!(channel(&file, None), [-1.0, 0.5]);
+    }
+
+    #[test]
+    fn float32_and_float64_read_as_stored() {
+        let file = wav(
+            FLOAT,
+            false,
+            1,
+            48_000,
+            32,
+            &bytes(&[0.5f32, -0.25, 1.5], f32::to_le_bytes),
+        );
+        let read_back = read(&file, None).unwrap();
+        assert_eq!(read_back.values, [0.5, -0.25, 1.5]);
+        assert_eq!(read_back.sample_rate, Some(48_000.0));
+        let file = wav(
+            FLOAT,
+            true,
+            2,
+            10,
+            64,
+            &bytes(&[0.1, 0.2, 0.3, 0.4], f64::to_le_bytes),
+        );
+        assert_eq!(channel(&file, Some(1)), [0.2, 0.4]);
+    }
+
+    #[test]
+    fn extensible_pcm_reads_like_plain_pcm() {
+        let frames: [i16; 6] = [1, 2, 3, -4, -5, -6];
+        let data = bytes(&frames, i16::to_le_bytes);
+        let plain = wav(PCM, false, 3, 12_000, 16, &data);
+        let extensible = wav(PCM, true, 3, 12_000, 16, &data);
+        for i in 0..3 {
+            assert_eq!(channel(&plain, Some(i)), channel(&extensible, Some(i)));
+        }
+        assert_eq!(
+            channel(&extensible, Some(2)),
+            [3.0 / 32768.0, -6.0 / 32768.0]
+        );
+    }
+
+    #[test]
+    fn a_channel_must_be_chosen_among_those_there() {
+        let file = wav(PCM, false, 2, 8000, 16, &[0; 8]);
+        let Err(Fault::Select(m)) = read(&file, None) else {
+            panic!("a stereo file was read without a channel");
+        };
+        assert_eq!(
+            m,
+            "no channel index given, and the file has 2 channel(s); choose one of 0..=1"
+        );
+        let Err(Fault::Select(m)) = read(&file, Some(2)) else {
+            panic!("channel 2 of 2 was read");
+        };
+        assert!(m.starts_with("channel index 2 given"), "{m}");
+    }
+
+    #[test]
+    fn unread_encodings_are_named() {
+        let mut adpcm = wav(PCM, false, 1, 8000, 16, &[0; 4]);
+        adpcm[20] = 2;
+        let Err(Fault::Unsupported(m)) = read(&adpcm, None) else {
+            panic!("ADPCM was read");
+        };
+        assert!(m.contains("0x0002"), "{m}");
+        let mut twelve = wav(PCM, false, 1, 8000, 16, &[0; 4]);
+        twelve[34] = 12;
+        let Err(Fault::Unsupported(m)) = read(&twelve, None) else {
+            panic!("12-bit PCM was read");
+        };
+        assert!(m.starts_with("12-bit integer PCM"), "{m}");
+        let mut rf64 = wav(PCM, false, 1, 8000, 16, &[0; 4]);
+        rf64[..4].copy_from_slice(b"RF64");
+        assert!(matches!(read(&rf64, None), Err(Fault::Unsupported(_))));
+    }
+
+    #[test]
+    fn truncated_or_inconsistent_files_are_refused() {
+        let file = wav(PCM, false, 2, 8000, 16, &[0; 8]);
+        for cut in 0..file.len() {
+            assert!(read(&file[..cut], Some(0)).is_err(), "cut at {cut}");
+        }
+        let Err(Fault::Corrupt(m)) = read(&file[..file.len() - 1], Some(0)) else {
+            panic!("a truncated data chunk was read");
+        };
+        assert!(m.contains("the `data` chunk"), "{m}");
+        // A data chunk of 7 bytes: not whole 4-byte frames.
+        let odd = wav(PCM, false, 2, 8000, 16, &[0; 7]);
+        let Err(Fault::Corrupt(m)) = read(&odd, Some(0)) else {
+            panic!("a partial frame was read");
+        };
+        assert!(m.contains("not whole frames"), "{m}");
+        let mut align = file.clone();
+        align[32] = 3;
+        assert!(matches!(read(&align, Some(0)), Err(Fault::Corrupt(_))));
+        assert!(matches!(
+            read(b"RIFF\0\0\0\0AVI ", None),
+            Err(Fault::Corrupt(_))
+        ));
+    }
+}
