@@ -52,8 +52,14 @@ pub(super) fn members(data: &[u8]) -> Result<Vec<Member>, Fault> {
     let mut c = Cursor::at(data, cd_offset, "the central directory")?;
     // Each entry takes at least 46 bytes, so `count` bounds no allocation here.
     let mut members = Vec::new();
-    for _ in 0..count {
-        members.push(central_entry(&mut c)?);
+    for i in 1..=count {
+        let entry = central_entry(&mut c).map_err(|f| match f {
+            Fault::Corrupt(m) => {
+                Fault::Corrupt(format!("central directory entry {i} of {count}: {m}"))
+            }
+            other => other,
+        })?;
+        members.push(entry);
     }
     Ok(members)
 }
@@ -121,7 +127,7 @@ fn central_entry(c: &mut Cursor) -> Result<Member, Fault> {
     let what = "a central directory entry";
     if c.take(4, what)? != CENTRAL {
         return Err(Fault::Corrupt(format!(
-            "bad {what} at byte {}",
+            "no entry signature at byte {}",
             c.pos() - 4
         )));
     }
@@ -224,4 +230,98 @@ pub(super) fn extract(data: &[u8], member: &Member) -> Result<Vec<u8>, Fault> {
         return Err(Fault::Corrupt(format!("{what} fails its CRC-32 check")));
     }
     Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An archive of one stored member `x.npy` holding `data`, its sizes and offset
+    /// in ZIP64 extra fields; with `record`, its directory found through the ZIP64
+    /// end records too.
+    fn zip64(data: &[u8], record: bool) -> Vec<u8> {
+        let crc = zlib_rs::crc32::crc32(0, data);
+        let len = (data.len() as u64).to_le_bytes();
+        let mut out = b"PK\x03\x04".to_vec();
+        out.extend([45, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        out.extend(crc.to_le_bytes());
+        out.extend([0xFF; 8]);
+        out.extend([5, 0, 20, 0]);
+        out.extend(b"x.npy");
+        out.extend([1, 0, 16, 0]);
+        out.extend(len);
+        out.extend(len);
+        out.extend(data);
+        let cd = out.len();
+        out.extend(b"PK\x01\x02");
+        out.extend([45, 0, 45, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        out.extend(crc.to_le_bytes());
+        out.extend([0xFF; 8]);
+        out.extend([5, 0, 28, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        out.extend([0xFF; 4]);
+        out.extend(b"x.npy");
+        out.extend([1, 0, 24, 0]);
+        out.extend(len);
+        out.extend(len);
+        out.extend(0u64.to_le_bytes());
+        let cd_len = (out.len() - cd) as u64;
+        let mut eocd = b"PK\x05\x06\0\0\0\0".to_vec();
+        if record {
+            let at = out.len() as u64;
+            out.extend(b"PK\x06\x06");
+            out.extend(44u64.to_le_bytes());
+            out.extend([45, 0, 45, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+            for v in [1, 1, cd_len, cd as u64] {
+                out.extend(v.to_le_bytes());
+            }
+            out.extend(b"PK\x06\x07\0\0\0\0");
+            out.extend(at.to_le_bytes());
+            out.extend(1u32.to_le_bytes());
+            eocd.extend([0xFF; 12]);
+        } else {
+            eocd.extend([1, 0, 1, 0]);
+            eocd.extend(u32::try_from(cd_len).unwrap().to_le_bytes());
+            eocd.extend(u32::try_from(cd).unwrap().to_le_bytes());
+        }
+        out.extend(eocd);
+        out.extend([0, 0]);
+        out
+    }
+
+    #[test]
+    fn zip64_sizes_and_end_records_are_followed() {
+        let data = b"seventeen bytes!!";
+        for record in [false, true] {
+            let archive = zip64(data, record);
+            let members = members(&archive).unwrap();
+            assert_eq!(members.len(), 1, "record {record}");
+            assert_eq!((members[0].name.as_str(), members[0].size), ("x.npy", 17));
+            assert_eq!(extract(&archive, &members[0]).unwrap(), data);
+        }
+    }
+
+    #[test]
+    fn a_count_or_size_past_the_archive_is_refused_without_allocating_it() {
+        let mut archive = zip64(b"data", false);
+        let eocd = archive.len() - 22;
+        // 65 534 members claimed, one there.
+        archive[eocd + 10..eocd + 12].copy_from_slice(&[0xFE, 0xFF]);
+        let Err(Fault::Corrupt(m)) = members(&archive) else {
+            panic!("a directory of missing entries was read");
+        };
+        assert_eq!(
+            m,
+            "central directory entry 2 of 65534: no entry signature at byte 138"
+        );
+        let mut archive = zip64(b"data", false);
+        // The ZIP64 field's compressed size, 16 bytes before the end of the directory.
+        let compressed_at = archive.len() - 22 - 16;
+        archive[compressed_at..compressed_at + 8].copy_from_slice(&(u64::MAX / 2).to_le_bytes());
+        let member = &members(&archive).unwrap()[0];
+        assert_eq!(member.compressed, u64::MAX / 2);
+        let Err(Fault::Corrupt(m)) = extract(&archive, member) else {
+            panic!("a member past the archive's end was read");
+        };
+        assert!(m.starts_with("truncated: member `x.npy`"), "{m}");
+    }
 }
