@@ -66,18 +66,33 @@ pub(super) fn read(path: &Path, variable: Option<&str>) -> Result<Loaded, ReadEr
         }
     };
     let file_len = std::fs::metadata(path).map_or(0, |m| m.len());
-    let bound = inflated_bound(usize::try_from(file_len).unwrap_or(usize::MAX));
-    if n > bound {
-        return Err(at(Fault::Corrupt(format!(
-            "`{name}` declares {n} elements, more than a {file_len}-byte file can store"
-        ))));
-    }
+    stored(&ds, &name, n, file_len).map_err(at)?;
     let values = ds.read_raw::<f64>().map_err(|e| hdf5_error(&name, e))?;
     Ok(Loaded {
         name,
         values,
         sample_rate: None,
     })
+}
+
+/// Refuses a dataset of `n` elements whose stored bytes (at most the file's
+/// `file_len`) cannot hold them, even deflated: libhdf5 would allocate its declared
+/// size and fill what is not stored with the fill value.
+fn stored(ds: &Dataset, name: &str, n: usize, file_len: u64) -> Result<(), Fault> {
+    let bytes = ds.storage_size().min(file_len);
+    if n > 0 && bytes == 0 {
+        return Err(Fault::Corrupt(format!(
+            "`{name}` declares {n} elements but stores no data (it was never written)"
+        )));
+    }
+    let element = ds.dtype().map_or(1, |t| t.size()).max(1);
+    let bound = inflated_bound(usize::try_from(bytes).unwrap_or(usize::MAX));
+    if n.saturating_mul(element) > bound {
+        return Err(Fault::Corrupt(format!(
+            "`{name}` declares {n} elements of {element} bytes, more than its {bytes} stored bytes can hold"
+        )));
+    }
+    Ok(())
 }
 
 /// What to say when libhdf5 cannot open the file: not HDF5 at all, or netCDF-3.
@@ -219,6 +234,20 @@ mod tests {
         let one = dir.path().join("one.nc");
         dataset(&File::create(&one).unwrap(), "x", &[2], &[1u8, 2]);
         assert_eq!(read(&one, None).unwrap().values, [1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_dataset_never_written_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("unwritten.h5");
+        let file = File::create(&path).unwrap();
+        file.new_dataset::<f64>().shape(1000).create("DE").unwrap();
+        drop(file);
+        let err = read(&path, Some("DE")).unwrap_err().to_string();
+        assert!(
+            err.ends_with("`DE` declares 1000 elements but stores no data (it was never written)"),
+            "{err}"
+        );
     }
 
     #[test]

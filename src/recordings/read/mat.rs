@@ -574,7 +574,7 @@ mod tests {
     }
 
     #[test]
-    fn complex_cell_char_and_tables_are_refused_by_name() {
+    fn complex_sparse_cell_char_and_tables_are_refused_by_name() {
         let z = LE.matrix(
             f::MX_DOUBLE | f::COMPLEX,
             &[1, 1],
@@ -593,9 +593,12 @@ mod tests {
             "m",
             &LE.element(f::MI_DOUBLE, &[0; 48]),
         );
-        let data = file(LE, &[z, cell, text, table]);
+        // Sparse: row indices, column starts and values follow the name.
+        let sparse = LE.matrix(5, &[2, 1], "sp", &LE.element(f::MI_INT32, &[0; 4]));
+        let data = file(LE, &[z, cell, text, table, sparse]);
         for (name, says) in [
             ("z", "`z` is complex"),
+            ("sp", "`sp` is a sparse array"),
             ("c", "`c` is a cell array"),
             ("s", "`s` is a char array"),
         ] {
