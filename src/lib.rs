@@ -64,6 +64,9 @@
 //! 5. [`run`] orchestrates a study: worker threads, one writer, the crash journal,
 //!    resume and shards. [`accuracy`] measures what each integrator setting costs.
 //!
+//! [`recordings`] reads measured recordings (NumPy, WAV, CSV, HDF5 / netCDF-4 and MAT
+//! files) as samples to set beside simulated series.
+//!
 //! [`numeric`] holds the SIMD lanes, trigonometry and linear algebra under the hot
 //! paths. Units are SI throughout (m, kg, s, N, rad) unless a name says otherwise.
 #![warn(missing_docs)]
@@ -76,6 +79,7 @@ pub mod multibody;
 #[doc(hidden)]
 pub mod numeric;
 pub mod output;
+pub mod recordings;
 pub mod run;
 pub mod signal;
 pub mod simulate;
