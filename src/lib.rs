@@ -74,6 +74,7 @@
 pub mod accuracy;
 pub mod bearing;
 pub mod error;
+pub mod joint;
 pub mod mechanism;
 pub mod multibody;
 #[doc(hidden)]

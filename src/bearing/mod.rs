@@ -13,7 +13,9 @@ pub mod stiffness;
 mod waviness;
 
 pub use defect::{fault_label, Defect, DefectProfile, DefectRace};
-pub use kernel::{BallSet, BallSum, ContactState, Regime, ONSET_SPEED_FLOOR};
+pub use kernel::{
+    latched_rate, BallSet, BallSum, ContactLaw, ContactState, LawSetup, Regime, ONSET_SPEED_FLOOR,
+};
 pub use waviness::{Harmonic, RaceWaviness, MAX_HARMONICS};
 
 use crate::error::ParamError;

@@ -207,12 +207,14 @@ impl BallSet {
             offsets,
         };
         match self.law {
-            Law::Undamped => sum_balls::<V, _, _, _>(balls, s, trig, k, Undamped, rule),
-            Law::CompressionOnly(c) => {
+            ContactLaw::Undamped => sum_balls::<V, _, _, _>(balls, s, trig, k, Undamped, rule),
+            ContactLaw::CompressionOnly(c) => {
                 sum_balls::<V, _, _, _>(balls, s, trig, k, CompressionOnly(c), rule)
             }
-            Law::TwoSided(c) => sum_balls::<V, _, _, _>(balls, s, trig, k, TwoSided(c), rule),
-            Law::Hysteresis => {
+            ContactLaw::TwoSided(c) => {
+                sum_balls::<V, _, _, _>(balls, s, trig, k, TwoSided(c), rule)
+            }
+            ContactLaw::Hysteresis => {
                 let n = self.dir_cos.len();
                 let law = Hysteresis {
                     rate: &self.hysteresis.rate[..n],

@@ -147,6 +147,91 @@ impl DampingLaw for Hysteresis<'_> {
     }
 }
 
+/// One contact's damping law in scalar form: the law a [`BallSet`] applies to every
+/// ball (its lanes through the [`DampingLaw`] types), and the one a clearance joint's
+/// single contact applies (docs/model.md §2.5, §2.10). The force of a loaded contact
+/// is [`ContactLaw::force`]; under a held regime (§8.4), [`ContactLaw::held_force`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactLaw {
+    /// `F = K δ^{3/2}`.
+    Undamped,
+    /// `F = K δ^{3/2} + C max(v, 0)` with `C` (N s/m).
+    CompressionOnly(f64),
+    /// `F = max(K δ^{3/2} + C v, 0)` with `C` (N s/m).
+    TwoSided(f64),
+    /// `F = max(K δ^{3/2} (1 + c v), 0)` with each contact's rate coefficient `c`
+    /// (s/m): `α`, or `χ/v₀` latched at the onset ([`latched_rate`]).
+    Hysteresis,
+}
+
+impl ContactLaw {
+    /// Force (N) of a loaded contact (`δ > 0`) from its elastic part
+    /// `elastic = K δ^{3/2}` (N), its approach speed `approach = δ̇` (m/s) and, for
+    /// [`ContactLaw::Hysteresis`], its rate coefficient `rate` (s/m; read by no
+    /// other law).
+    pub fn force(self, elastic: f64, approach: f64, rate: f64) -> f64 {
+        match self {
+            ContactLaw::Undamped => elastic,
+            ContactLaw::CompressionOnly(c) => elastic + c * approach.max(0.0),
+            ContactLaw::TwoSided(c) => (elastic + c * approach).max(0.0),
+            ContactLaw::Hysteresis => (elastic * (1.0 + rate * approach)).max(0.0),
+        }
+    }
+
+    /// Force (N) of a contact of a held regime's loaded set, continued past its
+    /// switches: `elastic = K δ |δ|^{1/2}` (N) whatever the sign of `δ`, and the
+    /// damping law's branch as `acting` says (docs/model.md §8.4).
+    pub fn held_force(self, elastic: f64, approach: f64, rate: f64, acting: bool) -> f64 {
+        match self {
+            ContactLaw::Undamped => elastic,
+            ContactLaw::CompressionOnly(c) if acting => elastic + c * approach,
+            ContactLaw::CompressionOnly(_) => elastic,
+            ContactLaw::TwoSided(c) if acting => elastic + c * approach,
+            ContactLaw::TwoSided(_) => 0.0,
+            ContactLaw::Hysteresis if acting => elastic * (1.0 + rate * approach),
+            ContactLaw::Hysteresis => 0.0,
+        }
+    }
+}
+
+/// A [`DampingModel`] resolved into the [`ContactLaw`] a contact applies, with the
+/// hysteresis laws' coefficients.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawSetup {
+    /// The law; [`ContactLaw::Undamped`] whenever the model's strength is 0.
+    pub law: ContactLaw,
+    /// The rate coefficient `c` (s/m) a contact starts with: `α` for the
+    /// fixed-coefficient law, 0 for the others until a restitution law latches one.
+    pub rate: f64,
+    /// `χ(e)` of a restitution-based law, which latches `c = χ/v₀` at each onset;
+    /// `None` for the others.
+    pub chi: Option<f64>,
+}
+
+impl LawSetup {
+    /// The law of `model` with the damping coefficient `damping` (N s/m) that the
+    /// compression-only and two-sided laws read (docs/model.md §2.5).
+    pub fn of(model: DampingModel, damping: f64) -> Self {
+        let (law, rate, chi) = match model {
+            _ if model.strength(damping) == 0.0 => (ContactLaw::Undamped, 0.0, None),
+            DampingModel::CompressionOnly => (ContactLaw::CompressionOnly(damping), 0.0, None),
+            DampingModel::TwoSided => (ContactLaw::TwoSided(damping), 0.0, None),
+            DampingModel::HuntCrossleyAlpha { alpha } => (ContactLaw::Hysteresis, alpha, None),
+            DampingModel::Restitution { law, restitution } => {
+                (ContactLaw::Hysteresis, 0.0, Some(law.chi(restitution)))
+            }
+        };
+        Self { law, rate, chi }
+    }
+}
+
+/// The rate coefficient `c = χ / max(v₀, v_floor)` (s/m) a restitution-based law
+/// latches for a contact whose onset approach speed is `approach` (m/s), with
+/// [`ONSET_SPEED_FLOOR`] (docs/model.md §2.5).
+pub fn latched_rate(chi: f64, approach: f64) -> f64 {
+    chi / approach.max(ONSET_SPEED_FLOOR)
+}
+
 /// Slowest approach speed (m/s) a restitution-based law latches: a slower onset
 /// (a ball loaded quasi-statically, or at rest under preload) is damped as if it
 /// had approached at this speed, so `χ/v₀` stays bounded (docs/model.md §2.5).
@@ -178,7 +263,7 @@ impl HysteresisRates {
         self.rate[r / LANES].0[r % LANES]
     }
 
-    /// No coefficients: the set of a law other than [`Law::Hysteresis`].
+    /// No coefficients: the set of a law other than [`ContactLaw::Hysteresis`].
     pub(super) fn none() -> Self {
         Self {
             rate: Vec::new(),

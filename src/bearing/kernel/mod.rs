@@ -56,8 +56,8 @@ mod tests;
 use evaluate::*;
 use laws::*;
 pub use laws::{
-    CompressionOnly, DampingLaw, Hysteresis, TwoSided, Undamped, APPROACH_MARGIN_TIME,
-    ONSET_SPEED_FLOOR,
+    latched_rate, CompressionOnly, ContactLaw, DampingLaw, Hysteresis, LawSetup, TwoSided,
+    Undamped, APPROACH_MARGIN_TIME, ONSET_SPEED_FLOOR,
 };
 use load::*;
 
@@ -193,22 +193,12 @@ struct Wave {
     sin_term: Vec<F64x4>,
 }
 
-/// The active damping law.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Law {
-    Undamped,
-    CompressionOnly(f64),
-    TwoSided(f64),
-    /// [`Hysteresis`] with the coefficients in [`BallSet::hysteresis`].
-    Hysteresis,
-}
-
 /// The ball set of one bearing, laid out for [`BallSet::force`].
 #[derive(Debug, Clone)]
 pub struct BallSet {
     balls: usize,
     stiffness: f64,
-    law: Law,
+    law: ContactLaw,
     /// `cos α_r`, `sin α_r` of each ball's base angle `α_r = 2π(r−1)/N_b`, [`LANES`]
     /// balls per vector; 0 on pads.
     dir_cos: Vec<F64x4>,
@@ -232,7 +222,7 @@ pub struct BallSet {
     turning: Option<Turning>,
     /// The defect tracks, if the case has defects of nonzero depth.
     defects: Option<Defects>,
-    /// The per-ball coefficients of [`Law::Hysteresis`] (empty for other laws).
+    /// The per-ball coefficients of [`ContactLaw::Hysteresis`] (empty for other laws).
     hysteresis: HysteresisRates,
 }
 
@@ -288,22 +278,10 @@ impl BallSet {
             -0.5 * params.clearance + params.inner_waviness.offset + params.outer_waviness.offset;
         let mut waves = waves_of(&params.inner_waviness, Race::Inner);
         waves.extend(waves_of(&params.outer_waviness, Race::Outer));
-        let (law, hysteresis) = match params.damping_model {
-            _ if params.damping_model.strength(params.damping) == 0.0 => {
-                (Law::Undamped, HysteresisRates::none())
-            }
-            DampingModel::CompressionOnly => (
-                Law::CompressionOnly(params.damping),
-                HysteresisRates::none(),
-            ),
-            DampingModel::TwoSided => (Law::TwoSided(params.damping), HysteresisRates::none()),
-            DampingModel::HuntCrossleyAlpha { alpha } => {
-                (Law::Hysteresis, HysteresisRates::new(n, alpha, None))
-            }
-            DampingModel::Restitution { law, restitution } => {
-                let chi = law.chi(restitution);
-                (Law::Hysteresis, HysteresisRates::new(n, 0.0, Some(chi)))
-            }
+        let setup = LawSetup::of(params.damping_model, params.damping);
+        let (law, hysteresis) = match setup.law {
+            ContactLaw::Hysteresis => (setup.law, HysteresisRates::new(n, setup.rate, setup.chi)),
+            law => (law, HysteresisRates::none()),
         };
         Self {
             balls: n,
@@ -357,7 +335,7 @@ impl BallSet {
     /// Whether the damping law latches each ball's approach speed at its contact
     /// onset ([`BallSet::latch`]): the restitution-based laws of docs/model.md §2.5.
     pub fn latches(&self) -> bool {
-        self.law == Law::Hysteresis && self.hysteresis.chi.is_some()
+        self.law == ContactLaw::Hysteresis && self.hysteresis.chi.is_some()
     }
 
     /// Latches the approach speed of every ball that is loaded at state `s`
@@ -372,7 +350,11 @@ impl BallSet {
     /// accepted step in contact is latched, and until then the ball carries the
     /// coefficient of its previous contact (0 before its first).
     pub fn latch(&mut self, s: &ContactState) {
-        let Some(chi) = self.hysteresis.chi.filter(|_| self.law == Law::Hysteresis) else {
+        let Some(chi) = self
+            .hysteresis
+            .chi
+            .filter(|_| self.law == ContactLaw::Hysteresis)
+        else {
             return;
         };
         for r in 0..self.balls {
@@ -380,7 +362,7 @@ impl BallSet {
             let rates = &mut self.hysteresis;
             if b.delta > 0.0 {
                 if !rates.in_contact[r] {
-                    rates.set(r, chi / b.approach.max(ONSET_SPEED_FLOOR));
+                    rates.set(r, latched_rate(chi, b.approach));
                     rates.in_contact[r] = true;
                 }
             } else {

@@ -55,31 +55,18 @@ impl BallSet {
             }
         }
         let approach = s.v[0] * normal[0] + s.v[1] * normal[1];
+        let rate = match self.law {
+            ContactLaw::Hysteresis => self.hysteresis.of(r),
+            _ => 0.0,
+        };
         let (force, elastic) = match regime {
             None if delta > 0.0 => {
                 let elastic = self.stiffness * delta * delta.sqrt();
-                let force = match self.law {
-                    Law::Undamped => elastic,
-                    Law::CompressionOnly(c) => elastic + c * approach.max(0.0),
-                    Law::TwoSided(c) => (elastic + c * approach).max(0.0),
-                    Law::Hysteresis => {
-                        (elastic * (1.0 + self.hysteresis.of(r) * approach)).max(0.0)
-                    }
-                };
-                (force, elastic)
+                (self.law.force(elastic, approach, rate), elastic)
             }
             Some(held) if held.loaded(r) => {
                 let elastic = self.stiffness * delta * delta.abs().sqrt();
-                let acting = held.acting(r);
-                let force = match self.law {
-                    Law::Undamped => elastic,
-                    Law::CompressionOnly(c) if acting => elastic + c * approach,
-                    Law::CompressionOnly(_) => elastic,
-                    Law::TwoSided(c) if acting => elastic + c * approach,
-                    Law::TwoSided(_) => 0.0,
-                    Law::Hysteresis if acting => elastic * (1.0 + self.hysteresis.of(r) * approach),
-                    Law::Hysteresis => 0.0,
-                };
+                let force = self.law.held_force(elastic, approach, rate, held.acting(r));
                 (force, elastic)
             }
             _ => (0.0, 0.0),
