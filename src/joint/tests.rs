@@ -392,10 +392,11 @@ fn steady_load_settles_at_the_short_bearing_eccentricity_and_attitude() {
             let attitude = ccw * (wj + wb).signum();
             let expected = (PI * (1.0 - eps * eps).sqrt() / (4.0 * eps)).atan();
             println!(
-                "ε {eps}: W {w:.3} N along {dir:.2} rad, ω_j {wj:.1} ω_b {wb:.1}: ε {ratio:.12}, \
-                 φ {:.9}° (closed form {:.9}°)",
+                "ε {eps}: W {w:.3} N along {dir:.2} rad, ω_j {wj:.1} ω_b {wb:.1}: ε off by \
+                 {:.1e}, φ {:.6}° off by {:.1e} rad",
+                ratio - eps,
                 attitude.to_degrees(),
-                expected.to_degrees()
+                attitude - expected
             );
             assert!((ratio - eps).abs() < 1e-9);
             assert!((attitude - expected).abs() < 1e-9);
