@@ -18,6 +18,7 @@ study_file_or_exit.
 Only h5py/xarray read the file; `studyrun` itself is never called.
 """
 
+import functools
 import glob
 import math
 import os
@@ -261,13 +262,48 @@ def written_times(ds):
 STRINGS_CHECKSUM = "studyrun_crc32"
 
 
-def _shard_part(ds):
-    """One shard as open_shards combines it: written_times, and its string variables
-    without their file's STRINGS_CHECKSUM."""
+def _shard_part(ds, refs=None):
+    """One shard as open_shards combines it: written_times, its string variables
+    without their file's STRINGS_CHECKSUM, and, with `refs` (_shard_references), the
+    references of every shard in place of its own (a shard holds those its cases use),
+    `reference_index` pointing into them."""
     ds = written_times(ds)
     for var in ds.variables.values():
         var.attrs.pop(STRINGS_CHECKSUM, None)
+    if refs is not None and "reference" in ds.dims:
+        index = ds["reference_index"]
+        ids = ds["reference"].values[index.values.astype("int64")]
+        rows = np.searchsorted(refs["reference"].values, ids)
+        ds = ds.reindex(reference=refs["reference"].values)
+        for name, var in refs.data_vars.items():
+            ds[name] = var
+        ds["reference"] = refs["reference"]
+        ds["reference_index"] = index.copy(data=rows.astype(index.dtype))
     return ds
+
+
+def _shard_references(paths):
+    """The `[reference]` and `[reference, ...]` variables of every shard, each
+    reference once, in id order; ValueError if two shards disagree on one."""
+    parts = []
+    for path in paths:
+        with xr.open_dataset(path, **OPEN_OPTIONS) as part:
+            names = [n for n, v in part.data_vars.items() if "reference" in v.dims]
+            refs = written_times(part[names].load())
+            for var in refs.variables.values():
+                var.attrs.pop(STRINGS_CHECKSUM, None)
+            parts.append(refs)
+    every = xr.concat(parts, dim="reference", data_vars="all", coords="minimal", join="exact",
+                      combine_attrs="override")
+    ids, first, inverse = np.unique(
+        every["reference"].values, return_index=True, return_inverse=True)
+    refs = every.isel(reference=first)
+    for name, var in every.data_vars.items():
+        kept, have = refs[name].values[inverse], var.values
+        same = (kept == have) | (pd.isnull(kept) & pd.isnull(have))
+        if not np.all(same):
+            raise ValueError(f"the shards hold different `{name}` for one reference")
+    return refs
 
 
 def open_shards(paths, lazy=None, partial=False):
@@ -276,8 +312,10 @@ def open_shards(paths, lazy=None, partial=False):
     writing a merged file.
 
     `paths` is a list of files in any order, or a glob pattern (`"part*.h5"`). Variables
-    over `case` are concatenated and sorted by case id; the others (the `reference`
-    runs, `time`, `frequency`) must be the same in every shard and are kept once (times
+    over `case` are concatenated and sorted by case id; the `reference` runs (a shard
+    holds those its cases use) are gathered by id, `reference_index` pointing into
+    them; the others (`time`, `frequency`) must be the same in every shard and are
+    kept once (times
     a tool's datetime round trip moved by a nanosecond are put back: written_times;
     the checksum of each file's strings, STRINGS_CHECKSUM, is dropped). Root
     attributes that every shard has alike are kept, `history` holds the shards' lines,
@@ -328,15 +366,17 @@ def open_shards(paths, lazy=None, partial=False):
         combine_attrs=_combine_shard_attrs,
     )
     try:
+        refs = _shard_references(paths)
+        part_of = functools.partial(_shard_part, refs=refs)
         if lazy:
             ds = xr.open_mfdataset(
-                paths, combine="nested", preprocess=_shard_part, **OPEN_OPTIONS, **combine
+                paths, combine="nested", preprocess=part_of, **OPEN_OPTIONS, **combine
             )
         else:
             parts = []
             for path in paths:
                 with xr.open_dataset(path, **OPEN_OPTIONS) as part:
-                    parts.append(_shard_part(part.load()))
+                    parts.append(part_of(part.load()))
             ds = xr.combine_nested(parts, **combine)
     except ValueError as e:
         if "study_fingerprint" in str(e):

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use studyrun::output::StudyReader;
 
-use crate::common::read_case_but_wall_time;
+use crate::common::{read_case_but_wall_time, studyrun_ok};
 
 pub(crate) fn studyrun(dir: &Path, args: &[&str]) -> Output {
     crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
@@ -236,6 +236,42 @@ fn shards_merge_into_the_single_run() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    assert_same_data(&dir.path().join("whole.h5"), &dir.path().join("merged.h5"));
+}
+
+#[test]
+fn a_shard_holds_only_its_references_and_merges_into_the_single_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let speeds = "name: speeds\nduration: 0.05\nsample_rate: 2000\ntransient: \"0.01 s\"\ngrid:\n  rpm: [600, 900, 1200]\n  ball_count: [8, 9]\n";
+    write(dir.path(), "speeds.yaml", speeds);
+    studyrun_ok(dir.path(), &["speeds.yaml", "-o", "whole.h5", "-q"]);
+    let mut parts = Vec::new();
+    for k in 1..=4 {
+        let part = format!("part{k}.h5");
+        let shard = format!("{k}/4");
+        studyrun_ok(
+            dir.path(),
+            &["speeds.yaml", "--shard", &shard, "-o", &part, "-q"],
+        );
+        // Each shard holds the references of its own cases, not the study's three.
+        let reader = StudyReader::open(dir.path().join(&part)).unwrap();
+        let l = reader.layout();
+        let used: std::collections::BTreeSet<u64> = l
+            .reference_index
+            .iter()
+            .map(|&row| l.reference_ids[row as usize])
+            .collect();
+        assert_eq!(
+            l.reference_ids,
+            used.into_iter().collect::<Vec<_>>(),
+            "{part}"
+        );
+        assert!(l.reference_ids.len() < 3, "{part}: {:?}", l.reference_ids);
+        parts.push(part);
+    }
+    let mut args = vec!["merge", "merged.h5"];
+    args.extend(parts.iter().rev().map(String::as_str));
+    studyrun_ok(dir.path(), &args);
     assert_same_data(&dir.path().join("whole.h5"), &dir.path().join("merged.h5"));
 }
 

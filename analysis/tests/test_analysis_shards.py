@@ -200,3 +200,31 @@ def test_shards_open_as_the_single_run(shard_paths, smoke):
         assert len(shard_paths) > 1
         assert_same_values(got.load(), smoke, skip=RUN_DEPENDENT)
         assert got.attrs["file_cases"] == smoke.sizes["case"] == smoke.attrs["study_cases"]
+
+
+@pytest.mark.parametrize("lazy", LAZY)
+def test_open_shards_gathers_each_shards_own_references(tmp_path, lazy):
+    """A shard holds the references its cases use: shard 1/2 (ids 0, 2, 4) those of
+    speeds 0 and 2, shard 2/2 (ids 1, 3, 5) that of speed 1. Opened together, every
+    reference is there once, in id order, and each case's `reference_index` points at
+    its own, as in the single run's file."""
+    speed = np.array([0, 1, 2, 1, 0, 1])  # each case's reference id
+    curves = np.arange(3)[:, None] * 100.0 + np.arange(5)
+
+    def with_refs(ds, ids):
+        ids = np.asarray(ids, dtype=np.int32)
+        rows = np.searchsorted(ids, speed[ds["case"].values])
+        ds = ds.drop_vars(["reference_force", "reference"])
+        ds["reference_index"] = ("case", rows.astype(np.int32))
+        ds["reference_force"] = (("reference", "time"), curves[ids], {"units": "N"})
+        return ds.assign_coords(reference=("reference", ids, {"units": "1"}))
+
+    paths = [
+        write(with_refs(shard([0, 2, 4]), [0, 2]), tmp_path / "part1.h5"),
+        write(with_refs(shard([1, 3, 5]), [1]), tmp_path / "part2.h5"),
+    ]
+    whole = xr.load_dataset(write(with_refs(shard(np.arange(6)), [0, 1, 2]), tmp_path / "whole.h5"),
+                            engine="h5netcdf")
+    with open_shards(paths, lazy=lazy) as ds:
+        assert ds["reference"].values.tolist() == [0, 1, 2]
+        assert_same_values(ds.load(), whole)

@@ -457,8 +457,10 @@ impl Layout {
     pub fn validate(&self) -> Result<(), String> {
         let n_case = self.case_ids.len();
         let n_ref = self.reference_ids.len();
-        if n_ref == 0 {
-            return Err(format!("`{REFERENCE}` needs at least one reference id"));
+        if n_ref == 0 && n_case > 0 {
+            return Err(format!(
+                "`{REFERENCE}` needs at least one reference id for the cases to refer to"
+            ));
         }
         distinct(CASE, &self.case_ids)?;
         distinct(REFERENCE, &self.reference_ids)?;

@@ -7,7 +7,9 @@ use std::time::SystemTime;
 use super::layout::shell_word;
 use super::OutputError;
 use super::{history_line, side_paths, OutputLock, VarSpec};
-use crate::output::{AttrValue, CaseRecord, Layout, ParamValues, Status, StudyReader, StudyWriter};
+use crate::output::{
+    AttrValue, CaseRecord, Layout, Param, ParamValues, Status, StudyReader, StudyWriter,
+};
 
 /// Refuses with `message` unless `ok`.
 fn ensure(ok: bool, message: impl FnOnce() -> String) -> Result<(), OutputError> {
@@ -61,7 +63,6 @@ fn layout_difference(l: &Layout, first: &Layout) -> Option<String> {
         ("revolution", l.revolutions != first.revolutions),
         ("order", l.orders != first.orders),
         ("sk_frequency", l.sk_frequencies != first.sk_frequencies),
-        ("reference", l.reference_ids != first.reference_ids),
     ];
     if let Some((name, _)) = coordinates.iter().find(|(_, differs)| *differs) {
         return Some(format!("its `{name}` coordinate differs"));
@@ -74,6 +75,16 @@ fn layout_difference(l: &Layout, first: &Layout) -> Option<String> {
         .or_else(|| variables_difference(&l.revolution_metrics, &first.revolution_metrics))
         .or_else(|| variables_difference(&l.order_spectra, &first.order_spectra))
         .or_else(|| variables_difference(params(l), params(first)))
+        .or_else(|| {
+            let refs = |l: &'_ Layout| {
+                l.reference_parameters
+                    .iter()
+                    .map(|p| p.spec.clone())
+                    .collect::<Vec<_>>()
+            };
+            variables_difference(&refs(l), &refs(first))
+        })
+        .or_else(|| variables_difference(&l.reference_series, &first.reference_series))
 }
 
 /// For each variable of `want`, its index in `have` (same names, checked before).
@@ -113,14 +124,23 @@ pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, Ou
         r.verify().map_err(OutputError::file(path))?;
     }
 
+    let refs = reference_places(&readers);
     let layout = merged_layout(
         &readers,
         &order,
+        &refs,
         &shard_order,
         expected,
         (output, shards, force),
     );
-    write_merged(output, shards, &readers, &order, &shard_order, &layout)?;
+    write_merged(
+        output,
+        shards,
+        &readers,
+        (&order, &refs),
+        &shard_order,
+        &layout,
+    )?;
     Ok(order.len())
 }
 
@@ -212,6 +232,28 @@ fn open_shards(shards: &[PathBuf]) -> Result<Vec<StudyReader>, OutputError> {
 /// Where a case of the merged file comes from: `(case id, shard, row)`.
 type CasePlace = (u64, usize, usize);
 
+/// `(reference id, shard, row)`: where a reference is read from.
+type ReferencePlace = (u64, usize, usize);
+
+/// Every reference of the shards, sorted by id, each from the first shard holding it
+/// (a shard holds the references its cases use).
+fn reference_places(readers: &[StudyReader]) -> Vec<ReferencePlace> {
+    let mut places: Vec<ReferencePlace> = readers
+        .iter()
+        .enumerate()
+        .flat_map(|(s, r)| {
+            r.layout()
+                .reference_ids
+                .iter()
+                .enumerate()
+                .map(move |(row, &id)| (id, s, row))
+        })
+        .collect();
+    places.sort_unstable();
+    places.dedup_by_key(|p| p.0);
+    places
+}
+
 /// `(case id, shard, row)` of every case, sorted by id, and the study's case count:
 /// refused unless the ids are exactly `0..N-1`, each in one shard.
 fn case_order(
@@ -277,6 +319,8 @@ struct Order {
     revolution_metrics: Vec<usize>,
     order_spectra: Vec<usize>,
     parameters: Vec<usize>,
+    reference_parameters: Vec<usize>,
+    reference_series: Vec<usize>,
 }
 
 /// Each shard's variables in the first shard's order.
@@ -287,8 +331,13 @@ fn shard_orders(readers: &[StudyReader]) -> Vec<Order> {
         .iter()
         .map(|r| {
             let l = r.layout();
-            let specs = |l: &Layout| l.parameters.iter().map(|p| p.spec.clone()).collect();
-            let (want, have): (Vec<VarSpec>, Vec<VarSpec>) = (specs(first), specs(l));
+            let specs = |ps: &[Param]| ps.iter().map(|p| p.spec.clone()).collect();
+            let (want, have): (Vec<VarSpec>, Vec<VarSpec>) =
+                (specs(&first.parameters), specs(&l.parameters));
+            let (want_refs, have_refs): (Vec<VarSpec>, Vec<VarSpec>) = (
+                specs(&first.reference_parameters),
+                specs(&l.reference_parameters),
+            );
             Order {
                 series: positions(&first.series, &l.series),
                 spectra: positions(&first.spectra, &l.spectra)
@@ -304,18 +353,50 @@ fn shard_orders(readers: &[StudyReader]) -> Vec<Order> {
                 revolution_metrics: positions(&first.revolution_metrics, &l.revolution_metrics),
                 order_spectra: positions(&first.order_spectra, &l.order_spectra),
                 parameters: positions(&want, &have),
+                reference_parameters: positions(&want_refs, &have_refs),
+                reference_series: positions(&first.reference_series, &l.reference_series),
             }
         })
         .collect();
     shard_order
 }
 
+/// The values of a parameter (of the kind of `like`) at `places` (`(id, shard, row)`),
+/// `at(shard)` being the parameter in that shard.
+fn gathered<'r>(
+    places: &[(u64, usize, usize)],
+    like: &ParamValues,
+    at: impl Fn(usize) -> &'r Param,
+) -> ParamValues {
+    match like {
+        ParamValues::F64(_) => ParamValues::F64(
+            places
+                .iter()
+                .map(|&(_, s, row)| match &at(s).values {
+                    ParamValues::F64(v) => v[row],
+                    ParamValues::Str(_) => f64::NAN,
+                })
+                .collect(),
+        ),
+        ParamValues::Str(_) => ParamValues::Str(
+            places
+                .iter()
+                .map(|&(_, s, row)| match &at(s).values {
+                    ParamValues::Str(v) => v[row].clone(),
+                    ParamValues::F64(_) => String::new(),
+                })
+                .collect(),
+        ),
+    }
+}
+
 /// The merged file's layout: the first shard's, with every case's ids, references and
-/// parameters in id order, the whole study's `file_cases`, no `shard`, and the merge's
+/// parameters in id order, every shard's references (`refs`) in id order, the whole study's `file_cases`, no `shard`, and the merge's
 /// line on top of `history`.
 fn merged_layout(
     readers: &[StudyReader],
     order: &[CasePlace],
+    refs: &[ReferencePlace],
     shard_order: &[Order],
     expected: usize,
     (output, shards, force): (&Path, &[PathBuf], bool),
@@ -323,38 +404,25 @@ fn merged_layout(
     let first = readers[0].layout();
     let mut layout: Layout = first.clone();
     layout.case_ids = order.iter().map(|o| o.0).collect();
+    for (p, param) in layout.parameters.iter_mut().enumerate() {
+        let at = |s: usize| &readers[s].layout().parameters[shard_order[s].parameters[p]];
+        param.values = gathered(order, &param.values, at);
+    }
+    layout.reference_ids = refs.iter().map(|r| r.0).collect();
+    for (p, param) in layout.reference_parameters.iter_mut().enumerate() {
+        let at = |s: usize| {
+            &readers[s].layout().reference_parameters[shard_order[s].reference_parameters[p]]
+        };
+        param.values = gathered(refs, &param.values, at);
+    }
     layout.reference_index = order
         .iter()
-        .map(|&(_, s, row)| readers[s].layout().reference_index[row])
+        .map(|&(_, s, row)| {
+            let l = readers[s].layout();
+            let id = l.reference_ids[l.reference_index[row] as usize];
+            refs.partition_point(|r| r.0 < id) as u64
+        })
         .collect();
-    for (p, param) in layout.parameters.iter_mut().enumerate() {
-        param.values = match &param.values {
-            ParamValues::F64(_) => ParamValues::F64(
-                order
-                    .iter()
-                    .map(|&(_, s, row)| {
-                        let q = shard_order[s].parameters[p];
-                        match &readers[s].layout().parameters[q].values {
-                            ParamValues::F64(v) => v[row],
-                            ParamValues::Str(_) => f64::NAN,
-                        }
-                    })
-                    .collect(),
-            ),
-            ParamValues::Str(_) => ParamValues::Str(
-                order
-                    .iter()
-                    .map(|&(_, s, row)| {
-                        let q = shard_order[s].parameters[p];
-                        match &readers[s].layout().parameters[q].values {
-                            ParamValues::Str(v) => v[row].clone(),
-                            ParamValues::F64(_) => String::new(),
-                        }
-                    })
-                    .collect(),
-            ),
-        };
-    }
     for (name, value) in layout.attributes.iter_mut() {
         match name.as_str() {
             "file_cases" => *value = AttrValue::I64(expected as i64),
@@ -379,7 +447,7 @@ fn write_merged(
     output: &Path,
     shards: &[PathBuf],
     readers: &[StudyReader],
-    order: &[CasePlace],
+    (order, refs): (&[CasePlace], &[ReferencePlace]),
     shard_order: &[Order],
     layout: &Layout,
 ) -> Result<(), OutputError> {
@@ -394,13 +462,17 @@ fn write_merged(
     let to_partial = OutputError::file(&partial);
     let mut writer = StudyWriter::create(&partial, layout).map_err(OutputError::file(&partial))?;
     let mut unfinished = RemoveOnDrop(Some(&partial));
-    for k in 0..layout.reference_ids.len() {
-        let series = readers[0]
-            .read_reference(k)
-            .map_err(OutputError::file(&shards[0]))?;
-        let refs: Vec<&[f64]> = series.iter().map(Vec::as_slice).collect();
+    for (k, &(_, s, src)) in refs.iter().enumerate() {
+        let series = readers[s]
+            .read_reference(src)
+            .map_err(OutputError::file(&shards[s]))?;
+        let series: Vec<&[f64]> = shard_order[s]
+            .reference_series
+            .iter()
+            .map(|&i| series[i].as_slice())
+            .collect();
         writer
-            .write_reference(k, &refs)
+            .write_reference(k, &series)
             .map_err(OutputError::file(&partial))?;
     }
     for (row, &(_, s, src)) in order.iter().enumerate() {

@@ -100,3 +100,4 @@ pub use paths::{
 };
 pub use reader::{CaseData, StudyReader};
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};
+

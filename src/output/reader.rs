@@ -177,7 +177,11 @@ impl StudyReader {
             }
             Ok(_) => {}
         }
-        let file = match File::open(&path) {
+        // The metadata cache bounded as the writer's: `merge` holds every shard open.
+        let opened = File::with_options()
+            .with_fapl(|p| p.mdc_config(&super::writer::bounded_metadata_cache()))
+            .open(&path);
+        let file = match opened {
             Err(e) if e.to_string().contains("file signature not found") => {
                 return Err(not_hdf5("is not an HDF5 file (no HDF5 signature)".into()))
             }

@@ -432,7 +432,8 @@ fn create_file(
     let mut writer =
         StudyWriter::create(&partial_path, layout).map_err(OutputError::file(&partial_path))?;
     let stored = stored_reference_channels(study);
-    each_reference(study, opts.jobs, |k, r| {
+    let indices: Vec<usize> = layout.reference_ids.iter().map(|&id| id as usize).collect();
+    each_reference(study, &indices, opts.jobs, |k, r| {
         let series: Vec<Vec<f64>> = stored
             .iter()
             .map(|c| study.keep_stored_samples(r.channel(c).expect("reference channel").to_vec()))

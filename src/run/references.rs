@@ -25,21 +25,22 @@ pub(super) fn run_reference(study: &Study, index: usize) -> Result<CaseOutput, R
     })
 }
 
-/// Runs every reference of `study`, `group` at a time in parallel, handing each group
-/// to `take` in index order before the next is made: at most `group` are held at once.
+/// Runs the references `indices` of `study`, `group` at a time in parallel, handing
+/// each to `take` with its position in `indices`, in that order, before the next group
+/// is made: at most `group` are held at once.
 pub(super) fn each_reference(
     study: &Study,
+    indices: &[usize],
     group: usize,
     mut take: impl FnMut(usize, CaseOutput) -> Result<(), RunError>,
 ) -> Result<(), RunError> {
-    let indices: Vec<usize> = (0..study.references.len()).collect();
-    for chunk in indices.chunks(group.max(1)) {
+    for (g, chunk) in indices.chunks(group.max(1)).enumerate() {
         let outputs: Vec<CaseOutput> = chunk
             .par_iter()
             .map(|&k| run_reference(study, k))
             .collect::<Result<_, _>>()?;
-        for (&k, output) in chunk.iter().zip(outputs) {
-            take(k, output)?;
+        for (i, output) in outputs.into_iter().enumerate() {
+            take(g * group.max(1) + i, output)?;
         }
     }
     Ok(())

@@ -15,7 +15,7 @@ pub(super) fn file_access(p: &mut FileAccessBuilder) -> &mut FileAccessBuilder {
 
 /// HDF5's metadata cache configuration bounded to [`METADATA_CACHE_BYTES`] (its
 /// adaptive resizing stays between half and all of it).
-pub(super) fn bounded_metadata_cache() -> MetadataCacheConfig {
+pub(in crate::output) fn bounded_metadata_cache() -> MetadataCacheConfig {
     MetadataCacheConfig {
         set_initial_size: true,
         initial_size: METADATA_CACHE_BYTES / 2,

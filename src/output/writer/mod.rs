@@ -26,6 +26,7 @@ use super::text;
 mod create;
 mod scalars;
 
+pub(super) use create::bounded_metadata_cache;
 use create::*;
 use scalars::Scalars;
 

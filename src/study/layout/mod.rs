@@ -59,7 +59,11 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
     let n_window = study.analysis_window().len();
     let parameters = parameters::case_parameters(study, &cases);
-    let reference_parameters = parameters::reference_parameters(study);
+    // The references this file's cases use, in index order: a shard holds only its own.
+    let mut reference_ids: Vec<u64> = cases.iter().map(|c| c.reference as u64).collect();
+    reference_ids.sort_unstable();
+    reference_ids.dedup();
+    let reference_parameters = parameters::reference_parameters(study, &reference_ids);
     let attributes = attributes::root_attributes(study, rows.len(), shard);
     Layout {
         case_ids: cases.iter().map(|c| c.id).collect(),
@@ -68,7 +72,11 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             .into_iter()
             .take(study.stored_bins())
             .collect(),
-        reference_ids: (0..study.references.len() as u64).collect(),
+        reference_index: cases
+            .iter()
+            .map(|c| reference_ids.partition_point(|&id| id < c.reference as u64) as u64)
+            .collect(),
+        reference_ids,
         series: variables::stored_series_specs(study),
         spectra: study
             .spectrum_channels
@@ -115,7 +123,6 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
         parameters,
         reference_parameters,
         reference_series: reference_specs(study),
-        reference_index: cases.iter().map(|c| c.reference as u64).collect(),
         attributes,
         storage: Storage {
             float32: study.float32,

@@ -90,16 +90,18 @@ pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
     parameters
 }
 
-/// The `[reference]` parameter variables: each ideal run's speed and speed profile.
-pub(super) fn reference_parameters(study: &Study) -> Vec<Param> {
+/// The `[reference]` parameter variables of the references `ids` (indices into
+/// `study.references`): each ideal run's speed and speed profile.
+pub(super) fn reference_parameters(study: &Study, ids: &[u64]) -> Vec<Param> {
+    let references = || ids.iter().map(|&id| &study.references[id as usize]);
     vec![
         Param {
             spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
-            values: ParamValues::F64(study.references.iter().map(|r| r.rpm).collect()),
+            values: ParamValues::F64(references().map(|r| r.rpm).collect()),
         },
         Param {
             spec: VarSpec::new("reference_speed_profile", "1", PROFILE_DESCRIPTION),
-            values: ParamValues::Str(study.references.iter().map(profile_name).collect()),
+            values: ParamValues::Str(references().map(profile_name).collect()),
         },
     ]
 }
