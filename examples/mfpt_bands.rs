@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use studyrun::recordings::read::{read_samples, Selector};
+use studyrun::signal::band_choice::usable_bandwidth;
 use studyrun::signal::envelope::{Band, BandChoice, EnvelopePlan};
 use studyrun::signal::indicators::band_energy;
 use studyrun::signal::spectrum::frequencies;
@@ -28,7 +29,7 @@ fn main() {
         .skip(1)
         .map(|a| a.parse().expect("band edges in Hz"))
         .collect();
-    let mut choices = vec![("auto", BandChoice::Auto)];
+    let mut choices = vec![("kurtog", BandChoice::Kurtogram), ("auto", BandChoice::Auto)];
     for pair in args.chunks(2) {
         let band = Band {
             low: pair[0],
@@ -45,6 +46,11 @@ fn main() {
     }
 }
 
+/// Samples analysed from the start of each recording: `MFPT_WINDOW` or all of it.
+fn window() -> usize {
+    std::env::var("MFPT_WINDOW").map_or(usize::MAX, |v| v.parse().expect("a sample count"))
+}
+
 /// The 14 files with their labels (`bpfo` outer race, `bpfi` inner race).
 fn files(dir: &Path) -> Vec<(PathBuf, &'static str)> {
     let mut out = Vec::new();
@@ -58,11 +64,13 @@ fn files(dir: &Path) -> Vec<(PathBuf, &'static str)> {
 
 /// Prints one file's line and returns whether the labelled line is the largest.
 fn report(path: &Path, label: &str, name: &str, choice: BandChoice) -> bool {
-    let x = read_samples(path, &Selector::Variable("bearing.gs".into()))
+    let mut x = read_samples(path, &Selector::Variable("bearing.gs".into()))
         .expect("readable recording")
         .values;
+    x.truncate(window());
     let mut plan = EnvelopePlan::new(x.len(), RATE).expect("plan");
-    let env = plan.analyse(&x, choice).expect("analysis");
+    let lines = LINES.map(|(_, f)| f);
+    let env = plan.analyse(&x, choice, &lines).expect("analysis");
     let freqs = frequencies(x.len(), RATE);
     let energies = LINES.map(|(_, f)| band_energy(&env.spectrum, &freqs, f));
     let best = (0..3)
@@ -71,8 +79,9 @@ fn report(path: &Path, label: &str, name: &str, choice: BandChoice) -> bool {
         .unwrap_or("none");
     let stem = path.file_stem().unwrap_or_default().to_string_lossy();
     println!(
-        "{name:6} {stem:24} band {:8.0}..{:8.0} Hz  bpfo {:.3e} bpfi {:.3e} 2bsf {:.3e}  \
+        "{name:6} {stem:24} usable {:6.0} band {:6.0}..{:6.0} Hz  bpfo {:.3e} bpfi {:.3e} 2bsf {:.3e}  \
          largest {best:4} label {label} {}",
+        usable(&x),
         env.band.low,
         env.band.high,
         energies[0],
@@ -81,4 +90,13 @@ fn report(path: &Path, label: &str, name: &str, choice: BandChoice) -> bool {
         if best == label { "ok" } else { "WRONG" }
     );
     best == label
+}
+
+/// The usable bandwidth of `x` (Hz, [`usable_bandwidth`]).
+fn usable(x: &[f64]) -> f64 {
+    let fft = realfft::RealFftPlanner::<f64>::new().plan_fft_forward(x.len());
+    let mut input = x.to_vec();
+    let mut spectrum = fft.make_output_vec();
+    fft.process(&mut input, &mut spectrum).expect("FFT");
+    usable_bandwidth(&spectrum, 0.5 * RATE)
 }

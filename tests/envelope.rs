@@ -107,7 +107,7 @@ fn bad_envelope_settings_are_refused_by_field() {
         ),
         (
             "envelope:\n  channels: [bearing_force]\n  band: narrow\n",
-            "expected `auto` or two frequencies",
+            "expected `auto`, `kurtogram` or two frequencies",
         ),
         (
             "envelope:\n  channels: [bearing_force]\n  band: [1001, 1009]\n",
