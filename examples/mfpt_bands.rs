@@ -29,20 +29,27 @@ fn main() {
         .skip(1)
         .map(|a| a.parse().expect("band edges in Hz"))
         .collect();
-    let mut choices = vec![("kurtog", BandChoice::Kurtogram), ("auto", BandChoice::Auto)];
-    for pair in args.chunks(2) {
-        let band = Band {
+    let mut choices = vec![BandChoice::Kurtogram, BandChoice::Auto];
+    choices.extend(args.chunks(2).map(|pair| {
+        BandChoice::Fixed(Band {
             low: pair[0],
             high: pair[1],
-        };
-        choices.push(("fixed", BandChoice::Fixed(band)));
+        })
+    }));
+    println!("| file | usable (Hz) | band (Hz) | BPFO : BPFI : 2·BSF | named |");
+    println!("|---|---|---|---|---|");
+    let mut named = vec![0; choices.len()];
+    for (path, label) in files(&dir) {
+        let mut x = read_samples(&path, &Selector::Variable("bearing.gs".into()))
+            .expect("readable recording")
+            .values;
+        x.truncate(window());
+        for (count, &choice) in named.iter_mut().zip(&choices) {
+            *count += usize::from(report(&path, &x, label, choice));
+        }
     }
-    for (name, choice) in choices {
-        let named = files(&dir)
-            .iter()
-            .filter(|(path, label)| report(path, label, name, choice))
-            .count();
-        println!("{name} {}: labelled fault largest in {named} of 14\n", choice.describe());
+    for (count, choice) in named.iter().zip(&choices) {
+        println!("{}: labelled fault largest in {count} of 14", choice.describe());
     }
 }
 
@@ -62,34 +69,32 @@ fn files(dir: &Path) -> Vec<(PathBuf, &'static str)> {
     out
 }
 
-/// Prints one file's line and returns whether the labelled line is the largest.
-fn report(path: &Path, label: &str, name: &str, choice: BandChoice) -> bool {
-    let mut x = read_samples(path, &Selector::Variable("bearing.gs".into()))
-        .expect("readable recording")
-        .values;
-    x.truncate(window());
+/// Prints one file's row for `choice` (the band energies over the largest of the
+/// three) and returns whether the labelled line is the largest.
+fn report(path: &Path, x: &[f64], label: &str, choice: BandChoice) -> bool {
     let mut plan = EnvelopePlan::new(x.len(), RATE).expect("plan");
     let lines = LINES.map(|(_, f)| f);
-    let env = plan.analyse(&x, choice, &lines).expect("analysis");
+    let env = plan.analyse(x, choice, &lines).expect("analysis");
     let freqs = frequencies(x.len(), RATE);
     let energies = LINES.map(|(_, f)| band_energy(&env.spectrum, &freqs, f));
     let best = (0..3)
         .max_by(|&a, &b| energies[a].total_cmp(&energies[b]))
-        .map(|i| LINES[i].0)
-        .unwrap_or("none");
+        .expect("three lines");
+    let ratios = energies.map(|e| e / energies[best]);
     let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let name = LINES[best].0;
     println!(
-        "{name:6} {stem:24} usable {:6.0} band {:6.0}..{:6.0} Hz  bpfo {:.3e} bpfi {:.3e} 2bsf {:.3e}  \
-         largest {best:4} label {label} {}",
-        usable(&x),
+        "| {stem} ({}) | {:.0} | {:.0}–{:.0} | {:.3} : {:.3} : {:.3} | {name}{} |",
+        choice.describe(),
+        usable(x),
         env.band.low,
         env.band.high,
-        energies[0],
-        energies[1],
-        energies[2],
-        if best == label { "ok" } else { "WRONG" }
+        ratios[0],
+        ratios[1],
+        ratios[2],
+        if name == label { "" } else { " (wrong)" }
     );
-    best == label
+    name == label
 }
 
 /// The usable bandwidth of `x` (Hz, [`usable_bandwidth`]).

@@ -1,4 +1,4 @@
-//! The automatic demodulation band of `envelope: {band: auto}` (docs/model.md §7.7):
+//! The automatic demodulation band of `envelope: {band: auto}` (docs/model.md §7.6.1):
 //! among the fast kurtogram's bands that lie inside the signal's usable bandwidth and
 //! are wide enough to hold the fault lines' sidebands, the band whose squared-envelope
 //! spectrum shows the case's candidate fault lines most prominently above its median

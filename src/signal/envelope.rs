@@ -46,7 +46,7 @@ pub enum BandChoice {
     /// Per case, among the kurtogram's bands inside the usable bandwidth and at least
     /// three times the largest fault line wide, the one whose squared-envelope spectrum
     /// shows the case's candidate fault lines most prominently
-    /// ([`super::band_choice`], docs/model.md §7.7); the kurtogram's choice within the
+    /// ([`super::band_choice`], docs/model.md §7.6.1); the kurtogram's choice within the
     /// usable bandwidth when the case has no finite fault line.
     Auto,
     /// Per case, the band of largest kurtosis of the fast kurtogram ([`kurtogram_bands`]).
