@@ -37,10 +37,16 @@ fn main() {
     let mut plan = EnvelopePlan::new(N, RATE).expect("plan");
     let mut times = [Vec::new(), Vec::new()];
     for _ in 0..rounds {
-        for (t, choice) in times.iter_mut().zip([BandChoice::Auto, BandChoice::Kurtogram]) {
+        for (t, choice) in times
+            .iter_mut()
+            .zip([BandChoice::Auto, BandChoice::Kurtogram])
+        {
             let start = Instant::now();
             for _ in 0..CALLS {
-                black_box(plan.analyse(black_box(&x), choice, &lines).expect("analysis"));
+                black_box(
+                    plan.analyse(black_box(&x), choice, &lines)
+                        .expect("analysis"),
+                );
             }
             t.push(start.elapsed().as_secs_f64() / CALLS as f64);
         }
@@ -49,7 +55,10 @@ fn main() {
         t.sort_by(f64::total_cmp);
         t[t.len() / 2]
     });
-    println!("lines (Hz): BPFO {:.2}, BPFI {:.2}, 2·BSF {:.2}", lines[0], lines[1], lines[2]);
+    println!(
+        "lines (Hz): BPFO {:.2}, BPFI {:.2}, 2·BSF {:.2}",
+        lines[0], lines[1], lines[2]
+    );
     println!("auto      {:.1} µs per window", auto * 1e6);
     println!("kurtogram {:.1} µs per window", kurtogram * 1e6);
     println!("ratio auto / kurtogram {:.2}", auto / kurtogram);

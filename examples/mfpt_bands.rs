@@ -49,7 +49,10 @@ fn main() {
         }
     }
     for (count, choice) in named.iter().zip(&choices) {
-        println!("{}: labelled fault largest in {count} of 14", choice.describe());
+        println!(
+            "{}: labelled fault largest in {count} of 14",
+            choice.describe()
+        );
     }
 }
 

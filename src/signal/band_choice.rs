@@ -53,7 +53,11 @@ pub fn usable_bandwidth(spectrum: &[Complex<f64>], nyquist: f64) -> f64 {
 /// Whether `band` (Hz) may be chosen: inside `0..usable` (Hz) and at least
 /// [`MIN_WIDTH_LINES`] times the largest finite line of `lines` (Hz) wide.
 pub fn admissible(band: Band, usable: f64, lines: &[f64]) -> bool {
-    let widest = lines.iter().copied().filter(|f| f.is_finite()).fold(0.0, f64::max);
+    let widest = lines
+        .iter()
+        .copied()
+        .filter(|f| f.is_finite())
+        .fold(0.0, f64::max);
     band.high <= usable && band.high - band.low >= MIN_WIDTH_LINES * widest
 }
 
@@ -71,7 +75,11 @@ pub fn admissible(band: Band, usable: f64, lines: &[f64]) -> bool {
 pub fn line_prominence(lags: &[Complex<f64>], df: f64, lines: &[f64]) -> f64 {
     let bins = lags.len();
     let hann = |d: usize| (0.5 * lags[d] - 0.25 * (lags[d - 1] + lags[d + 1])).norm_sqr();
-    let widest = lines.iter().copied().filter(|f| f.is_finite()).fold(0.0, f64::max);
+    let widest = lines
+        .iter()
+        .copied()
+        .filter(|f| f.is_finite())
+        .fold(0.0, f64::max);
     let top = (((HARMONICS as f64 + 0.5) * widest / df) as usize).min(bins.saturating_sub(2));
     if top < 3 {
         return f64::NAN;
@@ -210,7 +218,10 @@ mod tests {
             let (k_fault, k_band) = named(x, BandChoice::Kurtogram);
             println!("{what}: auto {band:?} names {fault}; kurtogram {k_band:?} names {k_fault}");
             assert_eq!(fault, 0, "{what}: auto's band {band:?} names line {fault}");
-            assert!(band.high - band.low >= MIN_WIDTH_LINES * LINES[2], "{what}: {band:?}");
+            assert!(
+                band.high - band.low >= MIN_WIDTH_LINES * LINES[2],
+                "{what}: {band:?}"
+            );
         }
         let (_, band) = named(&cases[0].1, BandChoice::Auto);
         assert!(band.high <= 1.15 * cutoff, "band {band:?} in the roll-off");

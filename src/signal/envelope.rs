@@ -670,7 +670,9 @@ pub(crate) mod tests {
         );
         let whole = plan.bands()[0].1;
         let mut whole_plan = EnvelopePlan::new(n, rate).unwrap();
-        let env = whole_plan.analyse(&x, BandChoice::Fixed(whole), &[]).unwrap();
+        let env = whole_plan
+            .analyse(&x, BandChoice::Fixed(whole), &[])
+            .unwrap();
         assert!(
             choice.kurtosis > 0.5 && choice.kurtosis > 5.0 * env.band_kurtosis,
             "band kurtosis {} vs whole {}",
