@@ -146,10 +146,9 @@ fn inner_waviness_shows_in_the_bearing_force_envelope() {
     // kurtogram (`band: kurtogram`: the line tested, 36 f_in, is none of the
     // candidate lines `auto` weighs). Inner waviness under the balls gives a bearing
     // force turning with orders q N_b = N_w + 1 = 36 of the inner pass frequency
-    // f_in = BPFI / N_b; the
-    // load turns with the crank, so |F| is modulated at 36 f_in = 221.3 Hz. Measured:
-    // that line is 29x the flat races' (0.0234 against 0.0008 N²) and 3.7x the wavy
-    // spectrum's median up to 1 kHz; asserted: 5x and 2x.
+    // f_in = BPFI / N_b; the load turns with the crank, so |F| is modulated at
+    // 36 f_in = 221.3 Hz. Measured: that line is 29x the flat races' (0.0234 against
+    // 0.0008 N²) and 3.7x the wavy spectrum's median up to 1 kHz; asserted: 5x and 2x.
     let dir = tempfile::tempdir().unwrap();
     let text = "name: wavy\nduration: 0.45\nsample_rate: 20000\ntransient: \"0.05 s\"\n\
                 envelope:\n  channels: [bearing_force]\n  band: kurtogram\n\
