@@ -260,10 +260,7 @@ impl EnvelopePlan {
         self.load(samples)?;
         let (band, band_kurtosis) = match choice {
             BandChoice::Fixed(band) => (band, self.band_kurtosis(band)),
-            BandChoice::Auto => {
-                let band = self.choose_by_lines(lines);
-                (band, self.band_kurtosis(band))
-            }
+            BandChoice::Auto => self.choose_by_lines(lines),
             BandChoice::Kurtogram => {
                 let c = self.choose_band(|_| true);
                 (c.band, c.kurtosis)
@@ -334,9 +331,15 @@ impl EnvelopePlan {
     /// `d = n/2` (the whole band of an even `n`) meets its mirror `−n/2` and counts
     /// `(2 Re R_d)²` instead.
     fn band_kurtosis(&mut self, band: Band) -> f64 {
-        let Some(bins) = self.band_lags(band) else {
-            return f64::NAN;
-        };
+        match self.band_lags(band) {
+            Some(bins) => self.lag_kurtosis(bins),
+            None => f64::NAN,
+        }
+    }
+
+    /// The kurtosis of [`EnvelopePlan::band_kurtosis`] from the first `bins` lags
+    /// [`EnvelopePlan::band_lags`] left in `lags`.
+    fn lag_kurtosis(&self, bins: usize) -> f64 {
         let n = self.centred.len();
         let r0 = self.lags[0].re;
         if r0.is_nan() || r0 <= 0.0 {
@@ -395,11 +398,12 @@ impl EnvelopePlan {
     /// fault `lines` (Hz): of the kurtogram's bands that are [`admissible`], the one
     /// of largest [`line_prominence`] (the first on a tie); the kurtogram's choice
     /// among the bands inside the usable bandwidth when no band has a finite
-    /// prominence (no finite line, or lines too close to 0 Hz for the bins).
-    fn choose_by_lines(&mut self, lines: &[f64]) -> Band {
+    /// prominence (no finite line, or lines too close to 0 Hz for the bins). Returns
+    /// the band and its complex-envelope kurtosis.
+    fn choose_by_lines(&mut self, lines: &[f64]) -> (Band, f64) {
         let usable = usable_bandwidth(&self.spectrum, 0.5 * self.sample_rate);
         let df = self.sample_rate / self.centred.len() as f64;
-        let (mut best, mut score) = (Band::NONE, f64::NAN);
+        let (mut best, mut score, mut kurtosis) = (Band::NONE, f64::NAN, f64::NAN);
         for i in 0..self.bands.len() {
             let band = self.bands[i].1;
             if !admissible(band, usable, lines) {
@@ -410,13 +414,14 @@ impl EnvelopePlan {
             };
             let prominence = line_prominence(&self.lags[..bins], df, lines);
             if prominence > score || (score.is_nan() && prominence.is_finite()) {
-                (best, score) = (band, prominence);
+                (best, score, kurtosis) = (band, prominence, self.lag_kurtosis(bins));
             }
         }
         if score.is_nan() {
-            best = self.choose_band(|band| band.high <= usable).band;
+            let c = self.choose_band(|band| band.high <= usable);
+            (best, kurtosis) = (c.band, c.kurtosis);
         }
-        best
+        (best, kurtosis)
     }
 
     /// The kurtogram's choice for the loaded samples among the bands `allowed` admits.
