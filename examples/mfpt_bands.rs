@@ -1,10 +1,12 @@
 //! The envelope chain on the MFPT bearing recordings (`../shared/data/mfpt`, never part
 //! of the repository): per file and per band choice, the band demodulated, the band
 //! energies around BPFO, BPFI and 2·BSF in its squared-envelope spectrum, and which
-//! is largest against the file's label. Each whole recording (146 484 samples, 3 s at
-//! 48 828 Hz) is analysed as one window.
+//! is largest against the file's label, as a Markdown table (docs/validation.md). Each
+//! recording is analysed as one window: all of it (146 484 samples, 3 s at 48 828 Hz),
+//! or its first `MFPT_WINDOW` samples. The choices are `kurtogram`, `auto` and any
+//! fixed bands given as pairs of edges in Hz.
 //!
-//! Run: `cargo run --release --example mfpt_bands [fixed-low-Hz fixed-high-Hz ...]`.
+//! Run: `cargo run --release --example mfpt_bands [LOW HIGH ...]`.
 
 use std::path::{Path, PathBuf};
 
