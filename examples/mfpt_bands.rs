@@ -3,15 +3,18 @@
 //! energies around BPFO, BPFI and 2·BSF in its squared-envelope spectrum, and which
 //! is largest against the file's label, as a Markdown table (docs/validation.md). Each
 //! recording is analysed as one window: all of it (146 484 samples, 3 s at 48 828 Hz),
-//! or its first `MFPT_WINDOW` samples. The choices are `kurtogram`, `auto` and any
-//! fixed bands given as pairs of edges in Hz.
+//! or its first `MFPT_WINDOW` samples. The choices are `kurtogram`, `auto`, any fixed
+//! bands given as pairs of edges in Hz, and with `MFPT_REJECTED=1` two rejected
+//! criteria over `auto`'s admissible bands: the largest complex-envelope kurtosis, and
+//! the largest kurtosis of the envelope spectrum up to 3.5 times the largest line (a
+//! protrugram-like criterion).
 //!
 //! Run: `cargo run --release --example mfpt_bands [LOW HIGH ...]`.
 
 use std::path::{Path, PathBuf};
 
 use studyrun::recordings::read::{read_samples, Selector};
-use studyrun::signal::band_choice::usable_bandwidth;
+use studyrun::signal::band_choice::{admissible, usable_bandwidth};
 use studyrun::signal::envelope::{Band, BandChoice, EnvelopePlan};
 use studyrun::signal::indicators::band_energy;
 use studyrun::signal::spectrum::frequencies;
@@ -48,6 +51,13 @@ fn main() {
         x.truncate(window());
         for (count, &choice) in named.iter_mut().zip(&choices) {
             *count += usize::from(report(&path, &x, label, choice));
+        }
+        if std::env::var("MFPT_REJECTED").is_ok() {
+            for (name, envelope_spectrum) in [("kurtosis", false), ("spectrum kurtosis", true)] {
+                let band = rejected(&x, envelope_spectrum);
+                print!("{name}: ");
+                report(&path, &x, label, BandChoice::Fixed(band));
+            }
         }
     }
     for (count, choice) in named.iter().zip(&choices) {
@@ -100,6 +110,35 @@ fn report(path: &Path, x: &[f64], label: &str, choice: BandChoice) -> bool {
         if name == label { "" } else { " (wrong)" }
     );
     name == label
+}
+
+/// The band a rejected criterion chooses among `auto`'s admissible bands: the largest
+/// complex-envelope kurtosis, or with `envelope_spectrum` the largest kurtosis
+/// `<A⁴>/<A²>²` of the envelope spectrum's amplitudes `A_k` over `1 ≤ k ≤ 3.5 f_max/Δf`.
+fn rejected(x: &[f64], envelope_spectrum: bool) -> Band {
+    let lines = LINES.map(|(_, f)| f);
+    let usable = usable(x);
+    let mut plan = EnvelopePlan::new(x.len(), RATE).expect("plan");
+    let top = (3.5 * lines[2] * x.len() as f64 / RATE) as usize;
+    let bands: Vec<Band> = plan.bands().iter().map(|b| b.1).collect();
+    let mut best = (Band::NONE, f64::NEG_INFINITY);
+    for band in bands.into_iter().filter(|&b| admissible(b, usable, &lines)) {
+        let env = plan
+            .analyse(x, BandChoice::Fixed(band), &lines)
+            .expect("analysis");
+        let score = if envelope_spectrum {
+            let a = &env.spectrum[1..=top];
+            let m2 = a.iter().map(|v| v * v).sum::<f64>() / a.len() as f64;
+            let m4 = a.iter().map(|v| v.powi(4)).sum::<f64>() / a.len() as f64;
+            m4 / (m2 * m2)
+        } else {
+            env.band_kurtosis
+        };
+        if score > best.1 {
+            best = (band, score);
+        }
+    }
+    best.0
 }
 
 /// The usable bandwidth of `x` (Hz, [`usable_bandwidth`]).
