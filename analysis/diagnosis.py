@@ -161,7 +161,7 @@ class Kurtogram:
 
 def kurtogram(x, sample_rate):
     """The fast kurtogram of the samples `x` at `sample_rate` (Hz) as studyrun
-    computes it for `band: auto` (docs/model.md §7.6): each band's analytic signal by
+    computes it for `band: kurtogram` (docs/model.md §7.6): each band's analytic signal by
     the brick wall of §7.4, band i of m spanning [i f_N/m, (i+1) f_N/m], f_N = f_s/2."""
     x = np.asarray(x, dtype=float)
     n = len(x)

@@ -12,6 +12,7 @@ use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
+use super::band_choice::{admissible, line_prominence, usable_bandwidth};
 use super::channel::AnalysisChannel;
 use super::spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
 
@@ -42,8 +43,14 @@ impl Band {
 pub enum BandChoice {
     /// The same band for every case.
     Fixed(Band),
-    /// Per case, the band of largest kurtosis of the fast kurtogram ([`kurtogram_bands`]).
+    /// Per case, among the kurtogram's bands inside the usable bandwidth and at least
+    /// three times the largest fault line wide, the one whose squared-envelope spectrum
+    /// shows the case's candidate fault lines most prominently
+    /// ([`super::band_choice`], docs/model.md §7.6.1); the kurtogram's choice within the
+    /// usable bandwidth when the case has no finite fault line.
     Auto,
+    /// Per case, the band of largest kurtosis of the fast kurtogram ([`kurtogram_bands`]).
+    Kurtogram,
 }
 
 impl BandChoice {
@@ -51,6 +58,7 @@ impl BandChoice {
     pub fn describe(&self) -> String {
         match self {
             BandChoice::Auto => "auto".to_string(),
+            BandChoice::Kurtogram => "kurtogram".to_string(),
             BandChoice::Fixed(b) => format!("{} Hz to {} Hz", b.low, b.high),
         }
     }
@@ -240,17 +248,21 @@ impl EnvelopePlan {
         &self.bands
     }
 
-    /// The envelope analysis of `samples` (the window, `n` values) with `choice`.
+    /// The envelope analysis of `samples` (the window, `n` values) with `choice`;
+    /// `lines` are the case's candidate fault lines (Hz: BPFO, BPFI, 2·BSF; NaN for
+    /// none), which [`BandChoice::Auto`] weighs.
     pub fn analyse(
         &mut self,
         samples: &[f64],
         choice: BandChoice,
+        lines: &[f64],
     ) -> Result<ChannelEnvelope, SpectrumError> {
         self.load(samples)?;
         let (band, band_kurtosis) = match choice {
             BandChoice::Fixed(band) => (band, self.band_kurtosis(band)),
-            BandChoice::Auto => {
-                let c = self.choose_band();
+            BandChoice::Auto => self.choose_by_lines(lines),
+            BandChoice::Kurtogram => {
+                let c = self.choose_band(|_| true);
                 (c.band, c.kurtosis)
             }
         };
@@ -270,7 +282,7 @@ impl EnvelopePlan {
     /// (the first in [`kurtogram_bands`] order on a tie).
     pub fn kurtogram(&mut self, samples: &[f64]) -> Result<KurtogramChoice, SpectrumError> {
         self.load(samples)?;
-        Ok(self.choose_band())
+        Ok(self.choose_band(|_| true))
     }
 
     /// Centres `samples` into the plan and takes their FFT.
@@ -313,16 +325,49 @@ impl EnvelopePlan {
 
     /// `<|z|⁴>/<|z|²>² − 2` of the analytic signal in `band` (NaN when the band holds
     /// no bin or no power), from the band's bins alone (docs/model.md §7.6): with the
-    /// `B` bins `Z_{k0+b}` and their autocorrelation `R_d = Σ_b Z_{k0+b+d} Z*_{k0+b}`
-    /// (`d = 0..B`, by an FFT of length `≥ 2B`), Parseval applied to `|z_j|²` gives
+    /// `B` bins `Z_{k0+b}` and their autocorrelation `R_d` ([`EnvelopePlan::band_lags`]),
+    /// Parseval applied to `|z_j|²` gives
     /// `Σ_j |z_j|⁴ / (Σ_j |z_j|²)² · n = (R_0² + 2 Σ_{d≥1} |R_d|²) / R_0²`, where a lag
     /// `d = n/2` (the whole band of an even `n`) meets its mirror `−n/2` and counts
-    /// `(2 Re R_d)²` instead. The common factor 2 of the `Z_k` cancels: the bins are
-    /// taken as `Z_k / 2`, so DC and Nyquist count half.
+    /// `(2 Re R_d)²` instead.
     fn band_kurtosis(&mut self, band: Band) -> f64 {
-        let Some(k0) = self.freqs.iter().position(|&f| band.contains(f)) else {
+        match self.band_lags(band) {
+            Some(bins) => self.lag_kurtosis(bins),
+            None => f64::NAN,
+        }
+    }
+
+    /// The kurtosis of [`EnvelopePlan::band_kurtosis`] from the first `bins` lags
+    /// [`EnvelopePlan::band_lags`] left in `lags`.
+    fn lag_kurtosis(&self, bins: usize) -> f64 {
+        let n = self.centred.len();
+        let r0 = self.lags[0].re;
+        if r0.is_nan() || r0 <= 0.0 {
             return f64::NAN;
-        };
+        }
+        let mut sum = r0 * r0;
+        for (d, r) in self.lags[1..bins]
+            .iter()
+            .enumerate()
+            .map(|(d, r)| (d + 1, r))
+        {
+            sum += if 2 * d == n {
+                (2.0 * r.re).powi(2)
+            } else {
+                2.0 * r.norm_sqr()
+            };
+        }
+        sum / (r0 * r0) - 2.0
+    }
+
+    /// Fills `lags` with the autocorrelation `R_d = Σ_b Z_{k0+b+d} Z*_{k0+b}`
+    /// (`d = 0..B`, times the padded length) of the `B` bins of `band`, by an FFT of
+    /// length `≥ 2B`, and returns `B` (`None` when the band holds no bin). `R_d` is
+    /// bin `d` of the DFT of `|z_j|²`, the squared envelope in the band (§7.6). The
+    /// common factor 2 of the `Z_k` is left out: the bins are taken as `Z_k / 2`, so
+    /// DC and Nyquist count half.
+    fn band_lags(&mut self, band: Band) -> Option<usize> {
+        let k0 = self.freqs.iter().position(|&f| band.contains(f))?;
         let bins = self.freqs[k0..]
             .iter()
             .take_while(|&&f| band.contains(f))
@@ -346,28 +391,41 @@ impl EnvelopePlan {
             *v = Complex::new(v.norm_sqr(), 0.0);
         }
         inverse.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
-        let n = self.centred.len();
-        let r0 = self.lags[0].re;
-        if r0.is_nan() || r0 <= 0.0 {
-            return f64::NAN;
-        }
-        let mut sum = r0 * r0;
-        for (d, r) in self.lags[1..bins]
-            .iter()
-            .enumerate()
-            .map(|(d, r)| (d + 1, r))
-        {
-            sum += if 2 * d == n {
-                (2.0 * r.re).powi(2)
-            } else {
-                2.0 * r.norm_sqr()
-            };
-        }
-        sum / (r0 * r0) - 2.0
+        Some(bins)
     }
 
-    /// The kurtogram's choice for the loaded samples.
-    fn choose_band(&mut self) -> KurtogramChoice {
+    /// The band of [`BandChoice::Auto`] for the loaded samples and the candidate
+    /// fault `lines` (Hz): of the kurtogram's bands that are [`admissible`], the one
+    /// of largest [`line_prominence`] (the first on a tie); the kurtogram's choice
+    /// among the bands inside the usable bandwidth when no band has a finite
+    /// prominence (no finite line, or lines too close to 0 Hz for the bins). Returns
+    /// the band and its complex-envelope kurtosis.
+    fn choose_by_lines(&mut self, lines: &[f64]) -> (Band, f64) {
+        let usable = usable_bandwidth(&self.spectrum, 0.5 * self.sample_rate);
+        let df = self.sample_rate / self.centred.len() as f64;
+        let (mut best, mut score, mut kurtosis) = (Band::NONE, f64::NAN, f64::NAN);
+        for i in 0..self.bands.len() {
+            let band = self.bands[i].1;
+            if !admissible(band, usable, lines) {
+                continue;
+            }
+            let Some(bins) = self.band_lags(band) else {
+                continue;
+            };
+            let prominence = line_prominence(&self.lags[..bins], df, lines);
+            if prominence > score || (score.is_nan() && prominence.is_finite()) {
+                (best, score, kurtosis) = (band, prominence, self.lag_kurtosis(bins));
+            }
+        }
+        if score.is_nan() {
+            let c = self.choose_band(|band| band.high <= usable);
+            (best, kurtosis) = (c.band, c.kurtosis);
+        }
+        (best, kurtosis)
+    }
+
+    /// The kurtogram's choice for the loaded samples among the bands `allowed` admits.
+    fn choose_band(&mut self, allowed: impl Fn(Band) -> bool) -> KurtogramChoice {
         let mut best = KurtogramChoice {
             band: Band::NONE,
             level: f64::NAN,
@@ -375,6 +433,9 @@ impl EnvelopePlan {
         };
         for i in 0..self.bands.len() {
             let (level, band) = self.bands[i];
+            if !allowed(band) {
+                continue;
+            }
             let kurtosis = self.band_kurtosis(band);
             if kurtosis > best.kurtosis || (best.kurtosis.is_nan() && kurtosis.is_finite()) {
                 best = KurtogramChoice {
@@ -522,7 +583,7 @@ pub(crate) mod tests {
             low: fc - 100.0 * df,
             high: fc + 100.0 * df,
         };
-        let env = plan.analyse(&x, BandChoice::Fixed(band)).unwrap();
+        let env = plan.analyse(&x, BandChoice::Fixed(band), &[]).unwrap();
         let (k1, k2) = (20, 40);
         assert!(
             (env.spectrum[k1] - 2.0 * m).abs() < 1e-12,
@@ -546,7 +607,7 @@ pub(crate) mod tests {
             low: fc - 5.0 * df,
             high: fc + 5.0 * df,
         };
-        let env = plan.analyse(&x, BandChoice::Fixed(narrow)).unwrap();
+        let env = plan.analyse(&x, BandChoice::Fixed(narrow), &[]).unwrap();
         assert!(env.spectrum[k1].abs() < 1e-12, "{}", env.spectrum[k1]);
     }
 
@@ -560,7 +621,7 @@ pub(crate) mod tests {
         let n = 1 << 16;
         let x = gaussian(n, 7);
         let mut plan = EnvelopePlan::new(n, 1.0).unwrap();
-        let env = plan.analyse(&x, BandChoice::Auto).unwrap();
+        let env = plan.analyse(&x, BandChoice::Auto, &[]).unwrap();
         let segment = stft_segment(n);
         assert_eq!(env.spectral_kurtosis.len(), segment / 2 + 1);
         assert_eq!(sk_frequencies(n, 1.0), frequencies(segment, 1.0));
@@ -573,7 +634,7 @@ pub(crate) mod tests {
         // frequency (to the leakage of its negative-frequency image, < 1e-6 here).
         let f0 = 0.1234;
         let tone: Vec<f64> = (0..n).map(|j| (TAU * f0 * j as f64 + 0.3).cos()).collect();
-        let env = plan.analyse(&tone, BandChoice::Auto).unwrap();
+        let env = plan.analyse(&tone, BandChoice::Auto, &[]).unwrap();
         // Its STFT bin and the two beside it, within the Hann main lobe.
         let k0 = (f0 * segment as f64).round() as usize;
         for k in k0 - 1..=k0 + 1 {
@@ -614,7 +675,9 @@ pub(crate) mod tests {
         );
         let whole = plan.bands()[0].1;
         let mut whole_plan = EnvelopePlan::new(n, rate).unwrap();
-        let env = whole_plan.analyse(&x, BandChoice::Fixed(whole)).unwrap();
+        let env = whole_plan
+            .analyse(&x, BandChoice::Fixed(whole), &[])
+            .unwrap();
         assert!(
             choice.kurtosis > 0.5 && choice.kurtosis > 5.0 * env.band_kurtosis,
             "band kurtosis {} vs whole {}",
@@ -622,7 +685,7 @@ pub(crate) mod tests {
             env.band_kurtosis
         );
         // Its envelope spectrum has its largest line at the impulse rate.
-        let env = plan.analyse(&x, BandChoice::Auto).unwrap();
+        let env = plan.analyse(&x, BandChoice::Kurtogram, &[]).unwrap();
         let df = rate / n as f64;
         let k = (1..200)
             .max_by(|&a, &b| env.spectrum[a].total_cmp(&env.spectrum[b]))
@@ -713,7 +776,7 @@ pub(crate) mod tests {
         let mut x = gaussian(256, 3);
         x[10] = f64::NAN;
         let mut plan = EnvelopePlan::new(256, 1.0).unwrap();
-        let env = plan.analyse(&x, BandChoice::Auto).unwrap();
+        let env = plan.analyse(&x, BandChoice::Auto, &[]).unwrap();
         assert!(env.band.low.is_nan() && env.band.high.is_nan());
         assert!(env.spectrum.iter().all(|a| a.is_nan()));
         assert!(env.spectral_kurtosis.iter().all(|a| a.is_nan()));

@@ -4,6 +4,7 @@
 //! it, the envelope analysis and condition indicators of §7.3–§7.7 and the order
 //! spectra of §7.9, of simulated channels or sensor series.
 
+pub mod band_choice;
 pub mod channel;
 pub mod envelope;
 pub mod fault_frequencies;
@@ -377,7 +378,7 @@ impl EnvelopeAnalysis {
         let mut kurtoses = Vec::with_capacity(self.settings.channels.len());
         for ch in &self.settings.channels {
             let series = &ch.samples(out, sensors)[window.clone()];
-            let env = self.plan.analyse(series, self.settings.band)?;
+            let env = self.plan.analyse(series, self.settings.band, &lines[1..])?;
             if let Some(squared) = squared.as_mut() {
                 squared.push(self.plan.squared_envelope().to_vec());
             }

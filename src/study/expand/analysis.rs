@@ -322,6 +322,10 @@ pub(super) fn envelope_settings(
             value: BandValue::Name(name),
             ..
         }) if name == "auto" => BandChoice::Auto,
+        Some(S {
+            value: BandValue::Name(name),
+            ..
+        }) if name == "kurtogram" => BandChoice::Kurtogram,
         Some(v) => BandChoice::Fixed(fixed_band(ctx, v, sampling, transient)?),
     };
     Ok(EnvelopeSettings { channels, band })
@@ -340,7 +344,7 @@ fn fixed_band(
     let bad = |message: String| ctx.err(place, "envelope.band", message);
     let BandValue::Range(edges) = &v.value else {
         return Err(bad(
-            "expected `auto` or two frequencies [low, high], e.g. [\"2 kHz\", \"8 kHz\"]"
+            "expected `auto`, `kurtogram` or two frequencies [low, high], e.g. [\"2 kHz\", \"8 kHz\"]"
                 .to_string(),
         ));
     };
