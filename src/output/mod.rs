@@ -100,4 +100,3 @@ pub use paths::{
 };
 pub use reader::{CaseData, StudyReader};
 pub use writer::{CaseRecord, EncodedRecord, Record, StudyWriter};
-

@@ -130,7 +130,7 @@ def envelope_channels(f):
 
 def test_the_study_has_every_envelope_variable(f):
     assert sorted(envelope_channels(f)) == ["bearing_force", "slider_acceleration"]
-    assert text(f.attrs["envelope_band"]) == "auto"
+    assert text(f.attrs["envelope_band"]) == "kurtogram"
     n = window(f).stop - window(f).start
     assert f.attrs["stft_segment"] == stft_segment(n)
     spectrum = f["bearing_force_envelope_spectrum"]
