@@ -235,21 +235,26 @@ type CasePlace = (u64, usize, usize);
 /// `(reference id, shard, row)`: where a reference is read from.
 type ReferencePlace = (u64, usize, usize);
 
-/// Every reference of the shards, sorted by id, each from the first shard holding it
-/// (a shard holds the references its cases use).
-fn reference_places(readers: &[StudyReader]) -> Vec<ReferencePlace> {
-    let mut places: Vec<ReferencePlace> = readers
+/// `(id, shard, row)` of every id `ids` gives for each shard's layout, sorted.
+fn places(readers: &[StudyReader], ids: fn(&Layout) -> &[u64]) -> Vec<(u64, usize, usize)> {
+    let mut places: Vec<_> = readers
         .iter()
         .enumerate()
         .flat_map(|(s, r)| {
-            r.layout()
-                .reference_ids
+            ids(r.layout())
                 .iter()
                 .enumerate()
                 .map(move |(row, &id)| (id, s, row))
         })
         .collect();
     places.sort_unstable();
+    places
+}
+
+/// Every reference of the shards, sorted by id, each from the first shard holding it
+/// (a shard holds the references its cases use).
+fn reference_places(readers: &[StudyReader]) -> Vec<ReferencePlace> {
+    let mut places = places(readers, |l| &l.reference_ids);
     places.dedup_by_key(|p| p.0);
     places
 }
@@ -261,19 +266,7 @@ fn case_order(
     shards: &[PathBuf],
 ) -> Result<(Vec<CasePlace>, usize), OutputError> {
     let attr = |r: &StudyReader, name: &str| r.attribute(name).cloned();
-    // (shard, row) of every case, sorted by case id.
-    let mut order: Vec<CasePlace> = readers
-        .iter()
-        .enumerate()
-        .flat_map(|(s, r)| {
-            r.layout()
-                .case_ids
-                .iter()
-                .enumerate()
-                .map(move |(row, &id)| (id, s, row))
-        })
-        .collect();
-    order.sort_unstable();
+    let order: Vec<CasePlace> = places(readers, |l| &l.case_ids);
     if let Some(w) = order.windows(2).find(|w| w[0].0 == w[1].0) {
         return Err(OutputError::Refused(format!(
             "case {} is in both {} and {}",
