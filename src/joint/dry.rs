@@ -123,12 +123,30 @@ impl DryContact {
     /// `F_n` of the contact law on `K δ^{3/2}` and `δ̇`, along `−n` on the journal,
     /// and the friction force `F_t` along `t` at the contact point.
     pub fn force(&self, motion: &JointMotion) -> JointForce {
+        self.force_in(motion, None)
+    }
+
+    /// Whether the journal touches the bushing at `motion` (`δ > 0`).
+    pub fn touches(&self, motion: &JointMotion) -> bool {
+        self.geometry.contact(motion).penetration > 0.0
+    }
+
+    /// The penetration `δ` (m) at `motion`: the switching surface of the contact.
+    pub fn penetration(&self, motion: &JointMotion) -> f64 {
+        self.geometry.contact(motion).penetration
+    }
+
+    /// [`DryContact::force`] with the contact held (docs/model.md §8.4): `None`
+    /// picks it from the sign of `δ`; `Some(false)` applies no force; `Some(true)`
+    /// continues the contact's law smoothly past `δ = 0` with the elastic part
+    /// `K δ |δ|^{1/2}`, so that an integrator can locate the exit.
+    pub fn force_in(&self, motion: &JointMotion, held: Option<bool>) -> JointForce {
         let k = self.geometry.contact(motion);
         let delta = k.penetration;
-        if delta <= 0.0 {
+        if !held.unwrap_or(delta > 0.0) {
             return JointForce::default();
         }
-        let elastic = self.stiffness * delta * delta.sqrt();
+        let elastic = self.stiffness * delta * delta.abs().sqrt();
         let normal = self.law.law.force(elastic, k.approach, self.rate);
         let friction = self.friction.force(normal, k.slip);
         let [n, t] = [k.normal, k.tangent];

@@ -124,8 +124,19 @@ impl LubricatedJoint {
     /// dissipation rates of [`DryContact::force`] with the film force added to
     /// `force` and its power in `film_power`.
     pub fn force(&self, motion: &JointMotion) -> JointForce {
+        self.force_in(motion, None)
+    }
+
+    /// The dry contact of the joint.
+    pub fn dry(&self) -> &DryContact {
+        &self.dry
+    }
+
+    /// [`LubricatedJoint::force`] with the dry contact held as
+    /// [`DryContact::force_in`] holds it.
+    pub fn force_in(&self, motion: &JointMotion, held: Option<bool>) -> JointForce {
         let film = self.film.force(motion);
-        let mut total = self.dry.force(motion);
+        let mut total = self.dry.force_in(motion, held);
         total.force[0] += film.force[0];
         total.force[1] += film.force[1];
         total.film_power = film.film_power;

@@ -137,8 +137,8 @@ fn ideal_mechanism(
 
 impl CartesianSliderCrank {
     /// Builds the case; refuses invalid parameters with the field named, and a
-    /// bearing case with a housing (docs/model.md §3.9), which only the production
-    /// [`super::SliderCrank`] simulates.
+    /// bearing case with a housing (docs/model.md §3.9), at rod_slider or with a
+    /// plain journal, which only the production [`super::SliderCrank`] simulates.
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
         if case.housing.is_some() && case.location != Location::Ideal {
@@ -147,6 +147,14 @@ impl CartesianSliderCrank {
                 "housing",
                 "without housing in the Cartesian reference model (only the production \
                  model simulates the housing)",
+            ));
+        }
+        if case.location == Location::RodSlider || case.joint.is_plain() {
+            return Err(ParamError::new(
+                "location",
+                format!("{} with joint {}", case.location, case.joint),
+                "a ball bearing at crank_ground or crank_rod in the Cartesian reference \
+                 model (only the production model simulates rod_slider and plain journals)",
             ));
         }
         let mp = &case.mechanism;
@@ -188,7 +196,7 @@ impl CartesianSliderCrank {
                     BallBearing::new(&case.bearing, mount)?,
                 )
             }
-            Location::CrankRod => {
+            Location::CrankRod | Location::RodSlider => {
                 let mount = Mounting {
                     housing: CRANK,
                     housing_point: [0.5 * l2, 0.0],
@@ -269,7 +277,7 @@ impl CartesianSliderCrank {
         let (x, shift) = match self.location {
             Location::Ideal => return self,
             Location::CrankGround => (0, e),
-            Location::CrankRod => {
+            Location::CrankRod | Location::RodSlider => {
                 // Slider pin minus rod centre: l3/2 in line.
                 let half = self.q0[6] - self.q0[3];
                 let cos = (1.0 - (0.5 * e[1] / half).powi(2)).sqrt();

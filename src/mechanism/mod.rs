@@ -11,5 +11,7 @@ mod slider_crank;
 pub use crate::speed::{CrankDrive, CrankMotion, Knots, SpeedProfile};
 pub use cartesian::CartesianSliderCrank;
 pub use model::CaseModel;
-pub use params::{CaseParams, Housing, Location, MechanismParams, Sample, GRAVITY};
+pub use params::{
+    CaseParams, Housing, JointKind, JournalParams, Location, MechanismParams, Sample, GRAVITY,
+};
 pub use slider_crank::{Energy, SliderCrank, MAX_BAND};

@@ -1,18 +1,20 @@
 //! What defines one case of the slider-crank (docs/model.md §1): where the bearing
-//! sits, the body parameters, the case's parameters, and the outputs at one instant.
+//! sits and which joint it is, the body parameters, the case's parameters, and the
+//! outputs at one instant.
 
 use std::fmt;
 use std::str::FromStr;
 
 use crate::bearing::BearingParams;
 use crate::error::ParamError;
+use crate::joint::{Friction, JournalGeometry, Material};
 
 use super::{CrankDrive, SpeedProfile};
 
 /// Standard gravity (m/s²), along −y when the effect is on.
 pub const GRAVITY: f64 = 9.81;
 
-/// Where the bearing sits (a grid axis).
+/// Where the joint with clearance sits (a grid axis).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Location {
     /// No bearing: all joints ideal (the reference mechanism).
@@ -21,11 +23,19 @@ pub enum Location {
     CrankGround,
     /// Bearing between crank and connecting rod (paper Example 2).
     CrankRod,
+    /// Bearing between connecting rod and slider (the revolute joint of the
+    /// clearance-joint benchmark of Flores et al. 2011).
+    RodSlider,
 }
 
 impl Location {
     /// Every location, in the order used for ids and files.
-    pub const ALL: [Location; 3] = [Location::Ideal, Location::CrankGround, Location::CrankRod];
+    pub const ALL: [Location; 4] = [
+        Location::Ideal,
+        Location::CrankGround,
+        Location::CrankRod,
+        Location::RodSlider,
+    ];
 
     /// The name used in grid files and outputs.
     pub fn name(self) -> &'static str {
@@ -33,6 +43,7 @@ impl Location {
             Location::Ideal => "ideal",
             Location::CrankGround => "crank_ground",
             Location::CrankRod => "crank_rod",
+            Location::RodSlider => "rod_slider",
         }
     }
 }
@@ -49,7 +60,172 @@ impl FromStr for Location {
         Location::ALL
             .into_iter()
             .find(|l| l.name() == s)
-            .ok_or_else(|| ParamError::new("location", s, "one of ideal, crank_ground, crank_rod"))
+            .ok_or_else(|| {
+                ParamError::new(
+                    "location",
+                    s,
+                    "one of ideal, crank_ground, crank_rod, rod_slider",
+                )
+            })
+    }
+}
+
+/// Which joint sits at the location (a grid axis; docs/model.md §2.10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+pub enum JointKind {
+    /// The ball bearing of docs/model.md §2.
+    #[default]
+    BallBearing,
+    /// A dry plain journal with radial clearance (docs/model.md §2.10).
+    DryClearance,
+    /// A lubricated plain journal: short-bearing film, dry contact beyond the film
+    /// limit (docs/model.md §2.10).
+    Lubricated,
+}
+
+impl JointKind {
+    /// Every joint kind, in the order used for ids and files.
+    pub const ALL: [JointKind; 3] = [
+        JointKind::BallBearing,
+        JointKind::DryClearance,
+        JointKind::Lubricated,
+    ];
+
+    /// The name used in grid files and outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointKind::BallBearing => "ball_bearing",
+            JointKind::DryClearance => "dry_clearance",
+            JointKind::Lubricated => "lubricated",
+        }
+    }
+
+    /// Whether the joint is a plain journal (dry or lubricated).
+    pub fn is_plain(self) -> bool {
+        self != JointKind::BallBearing
+    }
+}
+
+impl fmt::Display for JointKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for JointKind {
+    type Err = ParamError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        JointKind::ALL
+            .into_iter()
+            .find(|j| j.name() == s)
+            .ok_or_else(|| {
+                ParamError::new("joint", s, "one of ball_bearing, dry_clearance, lubricated")
+            })
+    }
+}
+
+/// The plain journal's parameters (docs/model.md §2.10), read by the
+/// [`JointKind::DryClearance`] and [`JointKind::Lubricated`] joints.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JournalParams {
+    /// Journal radius `R_j`, radial clearance `c = R_b − R_j` and length `L` (m).
+    pub geometry: JournalGeometry,
+    /// The material of journal and bushing (both of it).
+    pub material: Material,
+    /// Contact stiffness `K` (N/m^1.5); `None` for [`crate::joint::cylinder_stiffness`]
+    /// of the geometry and material.
+    pub stiffness: Option<f64>,
+    /// Modified Coulomb friction at the contact.
+    pub friction: Friction,
+    /// Dynamic viscosity `μ_v` of the lubricant (Pa s); read by the lubricated joint.
+    pub viscosity: f64,
+}
+
+impl Default for JournalParams {
+    /// The clearance-joint benchmark of Flores et al. (2007, 2011): `R_j` = 9.5 mm,
+    /// `c` = 0.5 mm, `L` = 40 mm, steel (207 GPa, 0.3), `μ` = 0.01 with
+    /// `v_0` = 0.1 mm/s and `v_1` = 1 mm/s, `μ_v` = 0.4 Pa s.
+    fn default() -> Self {
+        Self {
+            geometry: JournalGeometry {
+                radius: 9.5e-3,
+                clearance: 0.5e-3,
+                length: 40e-3,
+            },
+            material: Material {
+                youngs_modulus: 207e9,
+                poisson_ratio: 0.3,
+            },
+            stiffness: None,
+            friction: Friction {
+                coefficient: 0.01,
+                stick_speed: 1e-4,
+                slip_speed: 1e-3,
+            },
+            viscosity: 0.4,
+        }
+    }
+}
+
+impl JournalParams {
+    /// The contact stiffness `K` (N/m^1.5): the one given, else
+    /// [`crate::joint::cylinder_stiffness`] with journal and bushing of the material.
+    pub fn contact_stiffness(&self) -> f64 {
+        self.stiffness.unwrap_or_else(|| {
+            crate::joint::cylinder_stiffness(&self.geometry, self.material, self.material)
+        })
+    }
+
+    /// Checks every field; the error names the field, its value and what is allowed.
+    /// The clearance may be 0 (the `clearance` effect off): the journal then sits in
+    /// contact whenever it leaves the centre.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let g = &self.geometry;
+        let positive = [
+            ("journal.radius", g.radius),
+            ("journal.length", g.length),
+            ("journal.youngs_modulus", self.material.youngs_modulus),
+            ("journal.viscosity", self.viscosity),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(ParamError::new(name, v, "finite and > 0"));
+            }
+        }
+        let nu = self.material.poisson_ratio;
+        if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+            return Err(ParamError::new("journal.poisson_ratio", nu, "in (-1, 0.5)"));
+        }
+        let f = &self.friction;
+        let non_negative = [
+            ("journal.clearance", g.clearance),
+            ("journal.friction.coefficient", f.coefficient),
+            ("journal.friction.stick_speed", f.stick_speed),
+        ];
+        for (name, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ParamError::new(name, v, "finite and >= 0"));
+            }
+        }
+        if !(f.slip_speed.is_finite() && f.slip_speed > f.stick_speed) {
+            return Err(ParamError::new(
+                "journal.friction.slip_speed",
+                f.slip_speed,
+                format!(
+                    "finite and > journal.friction.stick_speed = {} m/s",
+                    f.stick_speed
+                ),
+            ));
+        }
+        let k = self.contact_stiffness();
+        if !(k.is_finite() && k > 0.0) {
+            return Err(ParamError::new(
+                "journal.stiffness",
+                k,
+                "finite and > 0 (give `journal.stiffness` when the clearance is 0)",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -128,8 +304,13 @@ pub struct CaseParams {
     pub mechanism: MechanismParams,
     /// Bearing parameters (unused for [`Location::Ideal`]).
     pub bearing: BearingParams,
-    /// Where the bearing sits.
+    /// Where the joint with clearance sits.
     pub location: Location,
+    /// Which joint it is; `bearing` acts on a [`JointKind::BallBearing`], `journal`
+    /// on a plain one (the contact law `bearing.damping_model` and `damping` on both).
+    pub joint: JointKind,
+    /// The plain journal's parameters (unused for a ball bearing).
+    pub journal: JournalParams,
     /// Crank speed (rev/min, > 0) when `speed` is `None`; NaN when `speed` gives
     /// a varying profile.
     pub rpm: f64,
@@ -197,6 +378,8 @@ impl Default for CaseParams {
             mechanism: MechanismParams::default(),
             bearing: BearingParams::default(),
             location: Location::CrankGround,
+            joint: JointKind::BallBearing,
+            journal: JournalParams::default(),
             rpm: 300.0,
             speed: None,
             gravity: false,
@@ -236,23 +419,38 @@ impl CaseParams {
     pub fn validate(&self) -> Result<(), ParamError> {
         self.mechanism.validate()?;
         if let Some(h) = &self.housing {
-            if self.location == Location::CrankRod {
+            if !matches!(self.location, Location::CrankGround | Location::Ideal) {
                 return Err(ParamError::new(
                     "location",
                     self.location,
                     "crank_ground or ideal with the housing effect (effects: [..., housing]): \
-                     the sprung housing carries the outer race at crank_ground only",
+                     the sprung housing carries the outer race or bushing at crank_ground only",
                 ));
             }
             h.validate()?;
         }
         if self.location != Location::Ideal {
-            self.bearing.validate()?;
             let slack = self.mechanism.rod_length - self.mechanism.crank_length;
-            if self.bearing.clearance.abs() >= slack {
+            let (field, clearance) = if self.joint.is_plain() {
+                self.journal.validate()?;
+                let c = self.journal.geometry.clearance;
+                if self.joint == JointKind::Lubricated && c <= 0.0 {
+                    return Err(ParamError::new(
+                        "journal.clearance",
+                        c,
+                        "> 0 for a lubricated joint, whose film fills the clearance \
+                         (with the clearance effect off the clearance is 0)",
+                    ));
+                }
+                ("journal.clearance", self.journal.geometry.clearance)
+            } else {
+                self.bearing.validate()?;
+                ("bearing.clearance", self.bearing.clearance)
+            };
+            if clearance.abs() >= slack {
                 return Err(ParamError::new(
-                    "bearing.clearance",
-                    self.bearing.clearance,
+                    field,
+                    clearance,
                     format!("|clearance| below rod_length - crank_length = {slack} m"),
                 ));
             }
@@ -287,7 +485,8 @@ pub struct Sample {
     pub crank_rod_force: [f64; 2],
     /// Bearing eccentricity `e` (m, global; zero for the ideal mechanism).
     pub eccentricity: [f64; 2],
-    /// Number of loaded balls (0 for the ideal mechanism).
+    /// Number of loaded balls (0 for the ideal mechanism); for a plain journal 1
+    /// while it touches the bushing (`δ > 0`), else 0.
     pub loaded_balls: usize,
     /// The housing's acceleration `ḧ` (m/s², global; NaN without a housing,
     /// docs/model.md §3.9).
@@ -296,12 +495,14 @@ pub struct Sample {
 
 impl Sample {
     /// The force at the joint a bearing at `location` occupies (or would occupy),
-    /// so that bearing and ideal cases compare one to one. `None` for `Ideal`.
+    /// so that bearing and ideal cases compare one to one. `None` for `Ideal`, and
+    /// for `RodSlider`, whose force the samples do not carry.
     pub fn joint_force(&self, location: Location) -> Option<[f64; 2]> {
         match location {
             Location::Ideal => None,
             Location::CrankGround => Some(self.crank_ground_force),
             Location::CrankRod => Some(self.crank_rod_force),
+            Location::RodSlider => None,
         }
     }
 }

@@ -47,10 +47,13 @@ impl FaultFrequencies {
     /// The frequencies of `params` with the crank at `rpm` (rev/min).
     fn at_rpm(params: &CaseParams, rpm: f64) -> Self {
         let omega = std::f64::consts::TAU * rpm / 60.0;
+        // The rod turns back and forth against the slider: no steady race speed at
+        // rod_slider; a plain journal has no balls.
         let (wi, wo) = match params.location {
+            _ if params.joint.is_plain() => (f64::NAN, f64::NAN),
             Location::CrankGround => (omega, 0.0),
             Location::CrankRod => (0.0, omega),
-            Location::Ideal => (f64::NAN, f64::NAN),
+            Location::RodSlider | Location::Ideal => (f64::NAN, f64::NAN),
         };
         let b = &params.bearing;
         let (di, d_o) = (b.inner_race_diameter, b.outer_race_diameter);

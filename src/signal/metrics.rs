@@ -85,7 +85,7 @@ pub fn vibration_metrics(
     let joint = match case.location {
         Location::CrankRod => Some(("crank_rod_force_x", "crank_rod_force_y")),
         Location::CrankGround => Some(("crank_ground_force_x", "crank_ground_force_y")),
-        Location::Ideal => None,
+        Location::RodSlider | Location::Ideal => None,
     };
     // The ideal mechanism has no bearing: no force to compare, nor a reference for it.
     let bearing_force = joint.map_or(

@@ -70,6 +70,13 @@ pub struct GridFile {
     /// Bearing location when not a grid axis.
     #[serde(default)]
     pub location: Option<S<Scalar>>,
+    /// Joint kind when not a grid axis: `ball_bearing`, `dry_clearance` or
+    /// `lubricated`.
+    #[serde(default)]
+    pub joint: Option<S<Scalar>>,
+    /// The plain journal's parameters (for the plain-joint cases).
+    #[serde(default)]
+    pub journal: Option<S<JournalSection>>,
     /// Integrator settings.
     #[serde(default)]
     pub solver: Option<SolverSection>,
@@ -192,6 +199,33 @@ pub struct DesignParameter {
     pub mean: Option<S<Scalar>>,
     pub sd: Option<S<Scalar>>,
     pub choices: Option<S<Vec<S<Scalar>>>>,
+}
+
+/// `journal:`: the plain journal (docs/model.md §2.10), each key optional.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct JournalSection {
+    pub radius: Option<S<Scalar>>,
+    /// Radial clearance: bushing radius minus journal radius.
+    pub clearance: Option<S<Scalar>>,
+    pub length: Option<S<Scalar>>,
+    pub youngs_modulus: Option<S<Scalar>>,
+    pub poisson_ratio: Option<S<Scalar>>,
+    /// The contact stiffness (default: from the materials and radii).
+    pub stiffness: Option<S<Scalar>>,
+    pub friction: Option<FrictionSection>,
+    pub viscosity: Option<S<Scalar>>,
+}
+
+/// `journal.friction:`: the modified Coulomb law (docs/model.md §2.10).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct FrictionSection {
+    pub coefficient: Option<S<Scalar>>,
+    pub stick_speed: Option<S<Scalar>>,
+    pub slip_speed: Option<S<Scalar>>,
 }
 
 /// `mechanism:` overrides (each optional).

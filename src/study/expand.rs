@@ -21,6 +21,7 @@ mod base;
 mod ctx;
 mod design;
 mod effects;
+mod journal;
 mod memory_check;
 mod references;
 mod replicates;
@@ -31,7 +32,7 @@ use crate::bearing::stiffness::ContactGeometry;
 use crate::bearing::{
     DampingModel, Defect, DefectProfile, DefectRace, Harmonic, RaceWaviness, RestitutionLaw,
 };
-use crate::mechanism::{CaseParams, Housing, Location as Site, SpeedProfile};
+use crate::mechanism::{CaseParams, Housing, JointKind, Location as Site, SpeedProfile};
 use crate::signal::channel::{AnalysisChannel, Source};
 use crate::signal::envelope::{Band, BandChoice, EnvelopeSettings};
 use crate::signal::order::{whole_revolutions, OrderSettings};
@@ -48,6 +49,7 @@ use base::*;
 use ctx::*;
 use effects::effects;
 pub use effects::Effects;
+use journal::*;
 use references::*;
 use solver::solver;
 
@@ -84,6 +86,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         (&groups, &axes_names),
         (total, count),
     )?;
+    check_joint_keys(&ctx, &file, &cases)?;
     let references = assign_references(&mut cases);
     let transient = transient_of(&ctx, &file, &sampling, &cases)?;
     let sensors = match &file.sensors {

@@ -23,7 +23,7 @@ use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::mechanism::CaseParams;
+use crate::mechanism::{CaseParams, Location};
 use crate::signal::channel::AnalysisChannel;
 use crate::signal::envelope::EnvelopeSettings;
 use crate::signal::order::OrderSettings;
@@ -245,13 +245,23 @@ impl Study {
                 .any(|c| c.params.speed.as_ref().is_some_and(|s| s.name() == profile))
         };
         let (ramp, sine) = (runs("ramp"), runs("sine"));
+        let plain = self.has_plain_joints();
         self.effects.recorded_parameters().filter(move |p| {
             match params::speed_profile_field(p.name) {
                 Some("ramp") => ramp,
                 Some("sine") => sine,
-                _ => true,
+                _ => plain || !params::is_journal_parameter(p),
             }
         })
+    }
+
+    /// Whether any case has a plain journal (`joint: dry_clearance` or `lubricated`)
+    /// at a location: then the file records the `journal_*` parameters and the
+    /// `joint` label.
+    pub fn has_plain_joints(&self) -> bool {
+        self.cases
+            .iter()
+            .any(|c| c.params.joint.is_plain() && c.params.location != Location::Ideal)
     }
 }
 

@@ -179,6 +179,9 @@ macro_rules! param {
 /// they hold its values, NaN for a healthy bearing (no defect of nonzero depth).
 /// `noise_realization` numbers the sensors' noise (docs/model.md §7.8).
 /// `m_h`, `k_h` and `c_h` are the housing's, NaN in files for a case without one.
+/// `journal_*` are the plain journal's (its clearance radial), NaN in files for a
+/// ball-bearing case, whose own keys a plain-joint case stores as NaN
+/// ([`stored_value`]).
 pub const PARAMETERS: &[ParamDef] = &[
     param!(
         "ball_count",
@@ -472,6 +475,51 @@ pub const PARAMETERS: &[ParamDef] = &[
         |c, v| c.bearing.outer_race_diameter = v
     ),
     param!(
+        "journal_radius",
+        "journal.radius",
+        Length,
+        false,
+        "plain journal radius R_j",
+        |c| c.journal.geometry.radius,
+        |c, v| c.journal.geometry.radius = v
+    ),
+    param!(
+        "journal_clearance",
+        "journal.clearance",
+        Length,
+        false,
+        "plain journal radial clearance c = R_b - R_j",
+        |c| c.journal.geometry.clearance,
+        |c, v| c.journal.geometry.clearance = v
+    ),
+    param!(
+        "journal_length",
+        "journal.length",
+        Length,
+        false,
+        "plain journal bearing length L",
+        |c| c.journal.geometry.length,
+        |c, v| c.journal.geometry.length = v
+    ),
+    param!(
+        "journal_friction_coefficient",
+        "journal.friction.coefficient",
+        Dimensionless,
+        false,
+        "plain journal friction coefficient mu",
+        |c| c.journal.friction.coefficient,
+        |c, v| c.journal.friction.coefficient = v
+    ),
+    param!(
+        "journal_viscosity",
+        "journal.viscosity",
+        Viscosity,
+        false,
+        "lubricant dynamic viscosity of the lubricated journal",
+        |c| c.journal.viscosity,
+        |c, v| c.journal.viscosity = v
+    ),
+    param!(
         "crank_length",
         "mechanism.crank_length",
         Length,
@@ -554,6 +602,31 @@ pub const PARAMETERS: &[ParamDef] = &[
     ),
 ];
 
+/// Whether `p` is one of the ball bearing's own parameters (balls, clearance,
+/// stiffness, races, waviness, defects), which do not act on a plain journal; the
+/// contact damping `damping` acts on both.
+pub fn is_ball_parameter(p: &ParamDef) -> bool {
+    p.field.starts_with("bearing.") && p.name != "damping"
+}
+
+/// Whether `p` is one of the plain journal's parameters (`journal_*`), which do not
+/// act on a ball bearing.
+pub fn is_journal_parameter(p: &ParamDef) -> bool {
+    p.field.starts_with("journal.")
+}
+
+/// The value of `p` a file stores for `case`: [`ParamDef::get`], or NaN for a
+/// parameter of the joint kind the case does not have (a ball bearing's keys in a
+/// plain-joint case, a journal's in a ball-bearing case).
+pub fn stored_value(p: &ParamDef, case: &CaseParams) -> f64 {
+    let plain = case.joint.is_plain();
+    if (plain && is_ball_parameter(p)) || (!plain && is_journal_parameter(p)) {
+        f64::NAN
+    } else {
+        p.get(case)
+    }
+}
+
 /// The value of grid axis `name` in `case`, as text: a scalar parameter's value in
 /// its base unit, or the name of the location or of the first defect's race
 /// ([`defect_race_name`]: `none` for a healthy bearing).
@@ -561,6 +634,7 @@ pub fn axis_value(name: &str, case: &CaseParams) -> String {
     match (lookup(name), name) {
         (Some(p), _) => format!("{}", p.get(case)),
         (None, "defect_race") => defect_race_name(case).to_string(),
+        (None, "joint") => case.joint.to_string(),
         (None, _) => case.location.to_string(),
     }
 }

@@ -38,6 +38,10 @@ pub enum Dimension {
     Angle,
     /// Pressure or elastic modulus, SI unit Pa.
     Pressure,
+    /// Dynamic viscosity, SI unit Pa s.
+    Viscosity,
+    /// A linear speed (a sliding speed), SI unit m/s.
+    Velocity,
 }
 
 impl Dimension {
@@ -120,6 +124,13 @@ impl Dimension {
             ],
             Dimension::Angle => &[("rad", P(0)), ("deg", X(PI / 180.0))],
             Dimension::Pressure => &[("Pa", P(0)), ("kPa", P(3)), ("MPa", P(6)), ("GPa", P(9))],
+            Dimension::Viscosity => &[
+                ("Pa s", P(0)),
+                ("Pa*s", P(0)),
+                ("mPa s", P(-3)),
+                ("cP", P(-3)),
+            ],
+            Dimension::Velocity => &[("m s-1", P(0)), ("m/s", P(0)), ("mm/s", P(-3))],
         }
     }
 
@@ -197,6 +208,11 @@ mod tests {
         assert_eq!(Speed.parse("300 rpm").unwrap(), 300.0);
         assert_eq!(Speed.parse("5 Hz").unwrap(), 300.0);
         assert_eq!(Stiffness.parse("9.57e9 N/m^1.5").unwrap(), 9.57e9);
+        assert_eq!(Viscosity.parse("0.4 Pa s").unwrap(), 0.4);
+        assert_eq!(Viscosity.parse("40 cP").unwrap(), 0.04);
+        assert_eq!(Viscosity.parse("40 mPa s").unwrap(), 0.04);
+        assert_eq!(Velocity.parse("0.1 mm/s").unwrap(), 1e-4);
+        assert_eq!(Velocity.parse("2 m/s").unwrap(), 2.0);
         assert_eq!(Stiffness.parse("9.57e9 N m-1.5").unwrap(), 9.57e9);
         assert_eq!(Stiffness.base_unit(), "N/m^(3/2)");
         assert_eq!(Time.parse("20 us").unwrap(), 20e-6);

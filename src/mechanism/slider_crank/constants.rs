@@ -20,10 +20,24 @@ pub(super) struct Constants {
     pub(super) omega: f64,
     /// `c_g`: 1 when the crank translates with `e` (crank_ground), else 0.
     pub(super) crank_moves: f64,
+    /// `a`: 1 when the rod's big end translates with `e` (crank_ground, crank_rod),
+    /// 0 when only its small end does (rod_slider): the rod centre's
+    /// `∂x/∂e_x` (–).
+    pub(super) rod_x: f64,
+    /// The rod centre's `∂y/∂e_y = a − 1/2` (–).
+    pub(super) rod_y: f64,
+    /// `m3 (a − 1/2)` (kg): the rod's share of the `e_y` equation's gravity and
+    /// inertia.
+    pub(super) m3_y: f64,
+    /// `m3 a + m4` (kg): the bodies translating with the big end along x.
+    pub(super) m_big: f64,
+    /// `m3/2 + m4` (kg): the rod and slider's weight on `tan θ3 · Ä_x` in the `e_y`
+    /// equation.
+    pub(super) m_t: f64,
     /// Gravity (m/s²) along −y, 0 when off.
     pub(super) g: f64,
     /// The reduced mass matrix `M̄ = [[m11, m_h t], [m_h t, m22]]`, `t = tan θ3`,
-    /// by its parts (kg): `m11 = m2 c_g + m3 + m4`, `m_h = m3/2 + m4`, and
+    /// by its parts (kg): `m11 = m2 c_g + m3 a + m4`, `m_h = m3 a/2 + m4`, and
     /// `m22 = m22_0 + (j3/L3² + m_q sin²θ3)/cos²θ3` with `m22_0 = m2 c_g + m3/4`,
     /// `m_q = m3/4 + m4`, `j3/L3²` as `j3_l3`.
     pub(super) m11: f64,
@@ -37,7 +51,7 @@ pub(super) struct Constants {
 }
 
 impl Constants {
-    /// The constants of mechanism `mp` with the bearing at `location`, constant crank
+    /// The constants of mechanism `mp` with the joint at `location`, constant crank
     /// speed `omega` (rad/s; any value when the speed varies) and gravity `g` (m/s², 0
     /// when off).
     pub(super) fn new(
@@ -53,8 +67,13 @@ impl Constants {
         } else {
             0.0
         };
-        let m11 = m2 * crank_moves + m3 + m4;
-        let m_h = 0.5 * m3 + m4;
+        let rod_x = if location == Location::RodSlider {
+            0.0
+        } else {
+            1.0
+        };
+        let m11 = m2 * crank_moves + m3 * rod_x + m4;
+        let m_h = 0.5 * m3 * rod_x + m4;
         let m22_0 = m2 * crank_moves + 0.25 * m3;
         let m_q = 0.25 * m3 + m4;
         let j3_l3 = j3 * inv_l3 * inv_l3;
@@ -69,6 +88,11 @@ impl Constants {
             m4,
             omega,
             crank_moves,
+            rod_x,
+            rod_y: rod_x - 0.5,
+            m3_y: (rod_x - 0.5) * m3,
+            m_big: m3 * rod_x + m4,
+            m_t: 0.5 * m3 + m4,
             g,
             m11,
             m_h,
@@ -155,13 +179,12 @@ impl Constants {
         // The generalised forces without the bearing's, which comes last (it waits
         // for the ball loop): the journal receives −F; gravity's part is constant.
         // The rod's and slider's terms are gathered by what they multiply.
-        let qx =
-            -(k.m2 * cg * kin.crank_dd0[0]) - (k.m3 + k.m4) * kin.big_end_x - k.m_h * kin.along;
-        let qy = -(k.g * (k.m2 * cg + 0.5 * k.m3))
+        let qx = -(k.m2 * cg * kin.crank_dd0[0]) - k.m_big * kin.big_end_x - k.m_h * kin.along;
+        let qy = -(k.g * (k.m2 * cg + k.m3_y))
             - k.m2 * cg * kin.crank_dd0[1]
             - kin.j3_theta_dd0
-            - 0.5 * k.m3 * kin.rod_dd0[1]
-            - k.m_h * kin.tan * kin.big_end_x
+            - k.m3_y * kin.rod_dd0[1]
+            - k.m_t * kin.tan * kin.big_end_x
             - k.m_q * kin.tan_along;
         let (bx, by) = (qx - f[0], qy - f[1]);
         let [i11, i12, i22] = kin.inv_mass;
@@ -175,8 +198,8 @@ impl Constants {
         Accelerations {
             theta_dd: kin.k_theta * edd[1] + kin.theta_dd0,
             rod_dd: [
-                edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
-                0.5 * edd[1] + kin.rod_dd0[1],
+                self.rod_x * edd[0] + 0.5 * tan * edd[1] + kin.rod_dd0[0],
+                self.rod_y * edd[1] + kin.rod_dd0[1],
             ],
             slider_dd: edd[0] + tan * edd[1] + kin.slider_dd0,
             crank_dd: [
@@ -219,7 +242,9 @@ impl Constants {
     /// Kinetic and gravitational potential energy (J) at eccentricity `e` (m), its
     /// rate `ed` (m/s), crank rate `w` (rad/s) and crank angle given as `u = (cos, sin)`
     /// (§3.8), from the body velocities of §3.1: `Ȧ = ė + L2 ω u⊥`, `θ̇3 = k_θ Ȧ_y`,
-    /// `ẋ4 = Ȧ_x + tan θ3 Ȧ_y`, `ṙ3 = ((Ȧ_x + ẋ4)/2, Ȧ_y/2)`, `ṙ2 = c_g ė + (L2/2) ω u⊥`.
+    /// `ẋ4 = Ȧ_x + tan θ3 Ȧ_y`,
+    /// `ṙ3 = (a ė_x + L2 ω u⊥_x + tan θ3 Ȧ_y/2, (a − 1/2) ė_y + L2 ω u⊥_y/2)`,
+    /// `ṙ2 = c_g ė + (L2/2) ω u⊥`.
     pub(super) fn body_energies(
         &self,
         kin: &Kinematics,
@@ -233,7 +258,11 @@ impl Constants {
         let big_end = [ed[0] + tip[0], ed[1] + tip[1]];
         let rod_rate = kin.k_theta * big_end[1];
         let slider = big_end[0] + kin.tan * big_end[1];
-        let rod = [0.5 * (big_end[0] + slider), 0.5 * big_end[1]];
+        // The rod centre: `a ė + L2 ω u⊥` plus half the rod's turn about its big end.
+        let rod = [
+            k.rod_x * ed[0] + tip[0] + 0.5 * kin.tan * big_end[1],
+            k.rod_y * ed[1] + 0.5 * tip[1],
+        ];
         let crank = [cg * ed[0] + 0.5 * tip[0], cg * ed[1] + 0.5 * tip[1]];
         let square = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
         let kinetic = 0.5
@@ -244,8 +273,8 @@ impl Constants {
                 + k.m4 * slider * slider);
         // Heights: crank centre c_g e_y + (L2/2) sin θ2, rod centre A_y/2; the
         // slider stays on the guide.
-        let big_end_y = e[1] + k.l2 * u[1];
-        let gravity = k.g * (k.m2 * (cg * e[1] + 0.5 * k.l2 * u[1]) + k.m3 * 0.5 * big_end_y);
+        let rod_y = k.rod_y * e[1] + 0.5 * k.l2 * u[1];
+        let gravity = k.g * (k.m2 * (cg * e[1] + 0.5 * k.l2 * u[1]) + k.m3 * rod_y);
         (kinetic, gravity)
     }
 }

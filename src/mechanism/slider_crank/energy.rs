@@ -31,12 +31,11 @@ impl SliderCrank {
         let k = &self.k;
         let motion = self.drive.motion(t);
         let crank = motion.angle;
-        let (e, ed, p, pd) = match self.bearing {
-            Some(_) => {
-                let (p, pd) = journal(&self.housing, y);
-                ([y[0], y[1]], [y[2], y[3]], p, pd)
-            }
-            None => ([0.0; 2], [0.0; 2], [0.0; 2], [0.0; 2]),
+        let (e, ed, p, pd) = if self.has_joint() {
+            let (p, pd) = journal(&self.housing, y);
+            ([y[0], y[1]], [y[2], y[3]], p, pd)
+        } else {
+            ([0.0; 2], [0.0; 2], [0.0; 2], [0.0; 2])
         };
         let kin = k.kinematics::<true>(crank.sin_cos(), &motion, p, pd)?;
         let (mut kinetic, gravity) = k.body_energies(&kin, motion.rate, p, pd);
@@ -59,7 +58,7 @@ impl SliderCrank {
                     .map(|b| 0.4 * b.elastic * b.delta)
                     .sum()
             }
-            None => 0.0,
+            None => self.journal_potential(y),
         };
         Ok(Energy {
             kinetic,
@@ -90,13 +89,13 @@ impl SliderCrank {
         let crank = motion.angle;
         let (e, ed) = ([y[0], y[1]], [y[2], y[3]]);
         let state = self.contact_state(crank, kin, e, ed);
-        // Race rates: the journal turns with the crank (crank_ground) or the rod
-        // (crank_rod, θ̇3 = k_θ Ȧ_y), the housing with the ground or the crank.
+        // Race rates: the journal turns with the crank (crank_ground), the rod
+        // (crank_rod, θ̇3 = k_θ Ȧ_y) or the slider (rod_slider: not at all), the
+        // housing with the ground, the crank or the rod.
+        let rod_rate = || kin.k_theta * (ed[1] + k.l2 * omega * kin.u[0]);
         let (journal_rate, housing_rate) = match self.location {
-            Location::CrankRod => {
-                let big_end_y = ed[1] + k.l2 * omega * kin.u[0];
-                (kin.k_theta * big_end_y, omega)
-            }
+            Location::CrankRod => (rod_rate(), omega),
+            Location::RodSlider => (0.0, rod_rate()),
             _ => (omega, 0.0),
         };
         let cage_rate = w.weights.journal * journal_rate + w.weights.housing * housing_rate;

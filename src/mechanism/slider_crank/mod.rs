@@ -50,6 +50,7 @@ use super::{CaseParams, CrankDrive, CrankMotion, Housing, Location, Sample, GRAV
 
 mod constants;
 mod energy;
+mod journal;
 mod rhs;
 mod sample;
 #[cfg(test)]
@@ -57,6 +58,7 @@ mod tests;
 
 use constants::Constants;
 use energy::*;
+use journal::*;
 use rhs::*;
 use sample::*;
 
@@ -143,6 +145,9 @@ pub struct SliderCrank {
     /// right-hand side's variant.
     drive: CrankDrive,
     bearing: Option<Bearing>,
+    /// The plain journal at the location (docs/model.md §3.10), `None` for a ball
+    /// bearing or the ideal mechanism.
+    journal: Option<Journal>,
     /// The instruction set of the right-hand side ([`Isa::detect`] by default).
     isa: Isa,
     /// Whether the energy ledger's quadratures ride along in the state.
@@ -160,7 +165,8 @@ impl SliderCrank {
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
         let mp = &case.mechanism;
-        let bearing = (case.location != Location::Ideal).then(|| {
+        let journal = Self::plain_journal(case);
+        let bearing = (case.location != Location::Ideal && journal.is_none()).then(|| {
             let mut balls = BallSet::new(&case.bearing);
             let weights = CageWeights::of(&case.bearing);
             if case.location == Location::CrankGround {
@@ -191,6 +197,7 @@ impl SliderCrank {
             ),
             drive,
             bearing,
+            journal,
             isa: Isa::detect(),
             ledger: false,
             housing: case
@@ -217,8 +224,14 @@ impl SliderCrank {
     /// held regime, the regime's). The ideal mechanism has no state and no ledger.
     #[must_use]
     pub fn with_energy_ledger(mut self, on: bool) -> Self {
-        self.ledger = on && self.bearing.is_some();
+        self.ledger = on && self.has_joint();
         self
+    }
+
+    /// Whether the case has a joint with clearance (a ball bearing or a plain
+    /// journal), i.e. state; false for the ideal mechanism.
+    pub fn has_joint(&self) -> bool {
+        self.bearing.is_some() || self.journal.is_some()
     }
 
     /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on

@@ -180,7 +180,7 @@ impl SliderCrank {
 
 impl OdeSystem for SliderCrank {
     fn dim(&self) -> usize {
-        match (self.bearing.is_some(), self.ledger) {
+        match (self.has_joint(), self.ledger) {
             (false, _) => 0,
             (true, false) => self.ledger_index(),
             (true, true) => self.ledger_index() + LEDGER_LEN,
@@ -189,6 +189,9 @@ impl OdeSystem for SliderCrank {
 
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), ModelError> {
         if self.bearing.is_none() {
+            if self.journal.is_some() {
+                return self.journal_rhs(t, y, dydt);
+            }
             return Ok(());
         }
         let held = self.bearing.as_ref().is_some_and(|w| w.held);
@@ -238,9 +241,10 @@ impl OdeSystem for SliderCrank {
         Ok(())
     }
 
-    /// Latches the approach speeds of balls whose contact began (restitution-based
-    /// damping laws only, docs/model.md §2.5); nothing else.
+    /// Latches the approach speeds of balls, or of the plain journal, whose contact
+    /// began (restitution-based damping laws only, docs/model.md §2.5); nothing else.
     fn accept_step(&mut self, t: f64, y: &[f64]) -> Result<(), ModelError> {
+        self.journal_regime(y, false);
         if self.bearing.as_ref().is_some_and(|w| w.balls.latches()) {
             let (state, _) = self.bearing_state(t, y)?;
             if let Some(w) = self.bearing.as_mut() {
@@ -252,7 +256,8 @@ impl OdeSystem for SliderCrank {
 
     fn hold_regime(&mut self, t: f64, y: &[f64]) -> Result<bool, ModelError> {
         if self.bearing.is_none() {
-            return Ok(false);
+            self.journal_regime(y, true);
+            return Ok(self.journal.is_some());
         }
         let (state, crank) = self.bearing_state(t, y)?;
         let angle = (self.location == Location::CrankGround).then_some(crank);
@@ -271,10 +276,14 @@ impl OdeSystem for SliderCrank {
         if let Some(w) = self.bearing.as_mut() {
             w.held = false;
         }
+        self.journal_release();
     }
 
     fn margin(&self) -> f64 {
-        self.bearing.as_ref().map_or(f64::INFINITY, |w| w.margin)
+        match &self.bearing {
+            Some(w) => w.margin,
+            None => self.journal_margin().unwrap_or(f64::INFINITY),
+        }
     }
 
     /// When at least [`CHATTER_SWITCHES`] of the last 64 regimes recorded changed

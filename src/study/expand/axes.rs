@@ -42,6 +42,8 @@ pub(super) enum Target {
     Param(&'static ParamDef, f64),
     /// The bearing location.
     Location(Site),
+    /// The joint kind at the location.
+    Joint(JointKind),
     /// The race of the first defect.
     DefectRace(DefectRace),
 }
@@ -51,6 +53,7 @@ impl Target {
         match *self {
             Target::Param(p, x) => p.set(case, x),
             Target::Location(site) => case.location = site,
+            Target::Joint(joint) => case.joint = joint,
             Target::DefectRace(race) => Defect::first(&mut case.bearing.defects).race = race,
         }
     }
@@ -60,6 +63,7 @@ impl Target {
         match self {
             Target::Param(p, _) => p.name,
             Target::Location(_) => "location",
+            Target::Joint(_) => "joint",
             Target::DefectRace(_) => "defect_race",
         }
     }
@@ -69,6 +73,7 @@ impl Target {
         match (self, other) {
             (Target::Param(_, a), Target::Param(_, b)) => a == b,
             (Target::Location(a), Target::Location(b)) => a == b,
+            (Target::Joint(a), Target::Joint(b)) => a == b,
             (Target::DefectRace(a), Target::DefectRace(b)) => a == b,
             _ => false,
         }
@@ -334,6 +339,7 @@ pub(super) fn check_repeats(
     let key = |t: &Target| match *t {
         Target::Param(_, x) => (x + 0.0).to_bits(),
         Target::Location(site) => site as u64,
+        Target::Joint(joint) => joint as u64,
         Target::DefectRace(race) => race as u64,
     };
     for group in groups {

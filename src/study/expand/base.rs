@@ -85,11 +85,15 @@ pub(super) fn finish_case(
     })
 }
 
-/// `params` with what the effects turned off taken out: no clearance, waviness,
-/// damping or defects; gravity as the effects say.
+/// `params` with what the effects turned off taken out: no clearance (the journal's
+/// contact stiffness kept at its value for the given clearance), waviness, damping
+/// or defects; gravity as the effects say.
 pub(super) fn without_effects_off(params: &mut CaseParams, effects: &Effects) {
     if !effects.clearance {
         params.bearing.clearance = 0.0;
+        let journal = &mut params.journal;
+        journal.stiffness = Some(journal.contact_stiffness());
+        journal.geometry.clearance = 0.0;
     }
     if !effects.waviness {
         params.bearing.inner_waviness = RaceWaviness::default();
@@ -115,7 +119,9 @@ pub(super) fn check_case(params: &CaseParams) -> Result<(), crate::error::ParamE
 pub(super) fn balls_fit(params: &CaseParams) -> Result<(), crate::error::ParamError> {
     let b = &params.bearing;
     match max_balls(b) {
-        Some(max) if params.location != Site::Ideal && b.ball_count > max => {
+        Some(max)
+            if params.location != Site::Ideal && !params.joint.is_plain() && b.ball_count > max =>
+        {
             Err(crate::error::ParamError::new(
                 "bearing.ball_count",
                 b.ball_count,
@@ -134,7 +140,7 @@ pub(super) fn balls_fit(params: &CaseParams) -> Result<(), crate::error::ParamEr
 
 /// Applies the setting `v` (when given) at `field` to the parameter `name` of `c`,
 /// recording where in `prov`.
-fn apply_given(
+pub(super) fn apply_given(
     ctx: &Ctx<'_>,
     c: &mut CaseParams,
     (name, v, field): (&str, &Option<S<Scalar>>, &str),
@@ -148,7 +154,7 @@ fn apply_given(
 }
 
 /// docs/model.md defaults, then the file's `mechanism:`, `bearing:`, `housing:`,
-/// `rpm:` or `speed:`, and `location:`.
+/// `journal:`, `rpm:` or `speed:`, `location:` and `joint:`.
 pub(super) fn base_case(
     ctx: &Ctx<'_>,
     file: &GridFile,
@@ -185,6 +191,9 @@ pub(super) fn base_case(
     if let Some(h) = &file.housing {
         housing_section(ctx, &mut c, h, effects, prov)?;
     }
+    if let Some(j) = &file.journal {
+        journal_section(ctx, &mut c, &j.value, effects, prov)?;
+    }
     match (&file.speed, &file.rpm) {
         (Some(_), Some(rpm)) => {
             return Err(ctx.err(
@@ -202,6 +211,7 @@ pub(super) fn base_case(
     }
     let location = ("location", &file.location, "location");
     apply_given(ctx, &mut c, location, effects, prov)?;
+    apply_given(ctx, &mut c, ("joint", &file.joint, "joint"), effects, prov)?;
     Ok(c)
 }
 

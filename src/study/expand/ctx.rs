@@ -89,7 +89,7 @@ impl Ctx<'_> {
                     Some(place),
                     field,
                     format!(
-                        "{} is not a location; expected one of ideal, crank_ground, crank_rod",
+                        "{} is not a location; expected one of ideal, crank_ground, crank_rod, rod_slider",
                         v.value
                     ),
                 ));
@@ -98,6 +98,23 @@ impl Ctx<'_> {
                 .parse()
                 .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.refusal()))?;
             return Ok(Target::Location(site));
+        }
+        if name == "joint" {
+            let joint = match &v.value {
+                Scalar::Text(t) => t.parse::<JointKind>().ok(),
+                Scalar::Num(_) => None,
+            };
+            return joint.map(Target::Joint).ok_or_else(|| {
+                self.err(
+                    Some(place),
+                    field,
+                    format!(
+                        "{} is not a joint; expected one of ball_bearing, dry_clearance, \
+                         lubricated",
+                        v.value
+                    ),
+                )
+            });
         }
         if name == "defect_race" {
             let race = match &v.value {
@@ -121,7 +138,7 @@ impl Ctx<'_> {
                 Some(place),
                 field,
                 format!(
-                    "unknown parameter; expected location, defect_race or one of: {}",
+                    "unknown parameter; expected location, joint, defect_race or one of: {}",
                     names.join(", ")
                 ),
             )

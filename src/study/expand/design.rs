@@ -354,7 +354,7 @@ impl DesignField<'_> {
     fn scalar(&self, v: &S<Scalar>, sub: &str) -> Result<(&'static ParamDef, f64), StudyError> {
         match self.resolve(v, sub)? {
             Target::Param(p, x) => Ok((p, x)),
-            Target::Location(_) | Target::DefectRace(_) => Err(self.ctx.err(
+            Target::Location(_) | Target::Joint(_) | Target::DefectRace(_) => Err(self.ctx.err(
                 Some(at(&v.referenced)),
                 &format!("{}.{sub}", self.field),
                 format!(

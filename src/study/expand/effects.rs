@@ -5,7 +5,8 @@ use super::*;
 /// Which effects a study simulates; anything off is not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Effects {
-    /// Diametral clearance (off: zero clearance).
+    /// The ball bearing's diametral and the journal's radial clearance (off: zero
+    /// clearance).
     pub clearance: bool,
     /// Raceway waviness (off: perfect races, no per-ball waviness terms).
     pub waviness: bool,
@@ -71,7 +72,7 @@ impl Effects {
             Some(("waviness", self.waviness))
         } else if param == "damping" {
             Some(("damping", self.damping))
-        } else if param == "clearance" {
+        } else if param == "clearance" || param == "journal_clearance" {
             Some(("clearance", self.clearance))
         } else if param.starts_with("defect") {
             Some(("defects", self.defects))

@@ -22,6 +22,8 @@ pub(super) fn assign_references(cases: &mut [Case]) -> Vec<CaseParams> {
 pub(super) fn reference_of(p: &CaseParams) -> CaseParams {
     CaseParams {
         location: Site::Ideal,
+        joint: Default::default(),
+        journal: Default::default(),
         bearing: Default::default(),
         housing: None,
         noise_realization: 0,
@@ -39,6 +41,8 @@ pub(super) fn reference_key(p: &CaseParams) -> ReferenceKey {
         mechanism,
         bearing: _,
         location: _,
+        joint: _,
+        journal: _,
         rpm,
         speed,
         gravity,

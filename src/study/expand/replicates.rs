@@ -21,12 +21,23 @@ const CONTACT_SCALE: f64 = 1e-6;
 /// The largest start perturbation replicates of `case` allow (m), with the length it
 /// is a fraction of, described: [`PERTURBATION_FRACTION`] of the smallest of the radial
 /// play |P_d|/2, every waviness amplitude and every defect depth (those above 0), or of
-/// [`CONTACT_SCALE`] with none of them; `None` for the ideal mechanism (no bearing to
+/// [`CONTACT_SCALE`] with none of them (a plain journal: of its radial clearance
+/// `c`, or of [`CONTACT_SCALE`] at zero clearance); `None` for the ideal mechanism (no bearing to
 /// start off centre in). A perturbed start then lies in replicate 0's contact state
 /// and changes every contact force by about 1.5 % at most (docs/model.md §9.5).
 fn perturbation_bound(case: &CaseParams) -> Option<(f64, String)> {
     if case.location == Location::Ideal {
         return None;
+    }
+    if case.joint.is_plain() {
+        let c = case.journal.geometry.clearance;
+        let (scale, what) = if c > 0.0 {
+            (c, "the journal's radial clearance c")
+        } else {
+            (CONTACT_SCALE, "the contact scale")
+        };
+        let what = format!("{what} ({})", micrometres(scale));
+        return Some((PERTURBATION_FRACTION * scale, what));
     }
     let b = &case.bearing;
     let mut scales = vec![(

@@ -4,7 +4,7 @@
 use crate::bearing::fault_label;
 use crate::mechanism::{CaseParams, Location};
 use crate::output::{Param, ParamValues, VarSpec};
-use crate::study::params::defect_race_name;
+use crate::study::params::{defect_race_name, stored_value};
 use crate::study::{Case, Study};
 
 /// What `speed_profile` and `reference_speed_profile` hold.
@@ -20,20 +20,21 @@ fn profile_name(p: &CaseParams) -> String {
 }
 
 /// The `[case]` parameter variables of `cases`: the recorded parameters of the study's
-/// effects, then the labels (location, design row, speed profile, defect race, fault).
+/// effects, then the labels (location, joint in a study with plain joints, design
+/// row, speed profile, defect race, fault).
 pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
     let mut parameters: Vec<Param> = study
         .recorded_parameters()
         .map(|p| Param {
             spec: VarSpec::new(p.name, p.dimension.file_units(), p.long_name),
-            values: ParamValues::F64(cases.iter().map(|c| p.get(&c.params)).collect()),
+            values: ParamValues::F64(cases.iter().map(|c| stored_value(p, &c.params)).collect()),
         })
         .collect();
     parameters.push(Param {
         spec: VarSpec::new(
             "location",
             "1",
-            "bearing location: ideal, crank_ground or crank_rod",
+            "bearing location: ideal, crank_ground, crank_rod or rod_slider",
         ),
         values: ParamValues::Str(
             cases
@@ -42,6 +43,21 @@ pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
                 .collect(),
         ),
     });
+    if study.has_plain_joints() {
+        parameters.push(Param {
+            spec: VarSpec::new(
+                "joint",
+                "1",
+                "joint at the location: ball_bearing, dry_clearance or lubricated",
+            ),
+            values: ParamValues::Str(
+                cases
+                    .iter()
+                    .map(|c| c.params.joint.name().to_string())
+                    .collect(),
+            ),
+        });
+    }
     if let Some(d) = &study.design {
         parameters.push(Param {
             spec: VarSpec::new(
@@ -82,6 +98,7 @@ pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
                 .iter()
                 .map(|c| match c.params.location {
                     Location::Ideal => "none".to_string(),
+                    _ if c.params.joint.is_plain() => "none".to_string(),
                     _ => fault_label(&c.params.bearing.defects),
                 })
                 .collect(),
