@@ -12,9 +12,9 @@ use std::path::Path;
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
     BearingSection, DefectSection, DesignParameter, DesignSection, EnvelopeSection,
-    GeometrySection, GridFile, HarmonicSection, HousingSection, MechanismSection, NoiseSection,
-    OutputSection, ReplicatesSection, SensorSection, SolverSection, SpectraSection, SpeedSection,
-    WavinessSection,
+    FrictionSection, GeometrySection, GridFile, HarmonicSection, HousingSection, JournalSection,
+    MechanismSection, NoiseSection, OutputSection, ReplicatesSection, SensorSection, SolverSection,
+    SpectraSection, SpeedSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -239,6 +239,8 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<MechanismSection>("mechanism."));
     expected.extend(keys_of::<BearingSection>("bearing."));
     expected.extend(keys_of::<HousingSection>("housing."));
+    expected.extend(keys_of::<JournalSection>("journal."));
+    expected.extend(keys_of::<FrictionSection>("journal.friction."));
     // inner_waviness and outer_waviness take the same keys; the document says so once.
     expected.extend(keys_of::<WavinessSection>("bearing.waviness."));
     expected.extend(keys_of::<HarmonicSection>("bearing.waviness.harmonics[]."));
@@ -297,6 +299,8 @@ fn the_units_table_lists_what_each_quantity_accepts() {
         Dimension::Inertia,
         Dimension::Angle,
         Dimension::Pressure,
+        Dimension::Viscosity,
+        Dimension::Velocity,
     ];
     // Every parameter's quantity is among them.
     for p in PARAMETERS {

@@ -5,6 +5,7 @@ mod common;
 mod accuracy;
 mod bearing_limits;
 mod cage_angle;
+mod clearance_joints;
 mod cli;
 mod cli_json;
 mod constraints;

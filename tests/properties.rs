@@ -92,6 +92,7 @@ fn case() -> impl Strategy<Value = CaseParams> {
                     gravity,
                     housing: None,
                     noise_realization: 0,
+                    ..CaseParams::default()
                 }
             },
         )
@@ -203,5 +204,6 @@ fn stress_case() -> CaseParams {
         gravity: true,
         housing: None,
         noise_realization: 0,
+        ..CaseParams::default()
     }
 }

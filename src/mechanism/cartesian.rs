@@ -135,28 +135,35 @@ fn ideal_mechanism(
     Ok(ideal)
 }
 
+/// Refuses what only the production model simulates: a housing, rod_slider and
+/// plain journals.
+fn refuse_production_only(case: &CaseParams) -> Result<(), ParamError> {
+    if case.housing.is_some() && case.location != Location::Ideal {
+        return Err(ParamError::new(
+            "effects",
+            "housing",
+            "without housing in the Cartesian reference model (only the production \
+             model simulates the housing)",
+        ));
+    }
+    if case.location == Location::RodSlider || case.joint.is_plain() {
+        return Err(ParamError::new(
+            "location",
+            format!("{} with joint {}", case.location, case.joint),
+            "a ball bearing at crank_ground or crank_rod in the Cartesian reference \
+             model (only the production model simulates rod_slider and plain journals)",
+        ));
+    }
+    Ok(())
+}
+
 impl CartesianSliderCrank {
     /// Builds the case; refuses invalid parameters with the field named, and a
     /// bearing case with a housing (docs/model.md §3.9), at rod_slider or with a
     /// plain journal, which only the production [`super::SliderCrank`] simulates.
     pub fn new(case: &CaseParams) -> Result<Self, ParamError> {
         case.validate()?;
-        if case.housing.is_some() && case.location != Location::Ideal {
-            return Err(ParamError::new(
-                "effects",
-                "housing",
-                "without housing in the Cartesian reference model (only the production \
-                 model simulates the housing)",
-            ));
-        }
-        if case.location == Location::RodSlider || case.joint.is_plain() {
-            return Err(ParamError::new(
-                "location",
-                format!("{} with joint {}", case.location, case.joint),
-                "a ball bearing at crank_ground or crank_rod in the Cartesian reference \
-                 model (only the production model simulates rod_slider and plain journals)",
-            ));
-        }
+        refuse_production_only(case)?;
         let mp = &case.mechanism;
         let (l2, l3) = (mp.crank_length, mp.rod_length);
         let bodies = bodies(mp);

@@ -99,38 +99,8 @@ impl Ctx<'_> {
                 .map_err(|e: crate::error::ParamError| self.err(Some(place), field, e.refusal()))?;
             return Ok(Target::Location(site));
         }
-        if name == "joint" {
-            let joint = match &v.value {
-                Scalar::Text(t) => t.parse::<JointKind>().ok(),
-                Scalar::Num(_) => None,
-            };
-            return joint.map(Target::Joint).ok_or_else(|| {
-                self.err(
-                    Some(place),
-                    field,
-                    format!(
-                        "{} is not a joint; expected one of ball_bearing, dry_clearance, \
-                         lubricated",
-                        v.value
-                    ),
-                )
-            });
-        }
-        if name == "defect_race" {
-            let race = match &v.value {
-                Scalar::Text(t) => t.parse::<DefectRace>().ok(),
-                Scalar::Num(_) => None,
-            };
-            return race.map(Target::DefectRace).ok_or_else(|| {
-                self.err(
-                    Some(place),
-                    field,
-                    format!(
-                        "{} is not a defect race; expected one of outer, inner, ball",
-                        v.value
-                    ),
-                )
-            });
+        if let Some(target) = self.named(name, v, field) {
+            return target;
         }
         let param = lookup(name).ok_or_else(|| {
             let names: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
@@ -150,6 +120,38 @@ impl Ctx<'_> {
             return Err(self.err(Some(place), field, rule));
         }
         Ok(Target::Param(param, x))
+    }
+
+    /// The value of a name-valued key (`joint`, `defect_race`), checked; `None` for
+    /// any other key.
+    fn named(&self, name: &str, v: &S<Scalar>, field: &str) -> Option<Result<Target, StudyError>> {
+        let place = at(&v.referenced);
+        let (parsed, what, allowed) = match name {
+            "joint" => (
+                match &v.value {
+                    Scalar::Text(t) => t.parse::<JointKind>().ok().map(Target::Joint),
+                    Scalar::Num(_) => None,
+                },
+                "joint",
+                "ball_bearing, dry_clearance, lubricated",
+            ),
+            "defect_race" => (
+                match &v.value {
+                    Scalar::Text(t) => t.parse::<DefectRace>().ok().map(Target::DefectRace),
+                    Scalar::Num(_) => None,
+                },
+                "defect race",
+                "outer, inner, ball",
+            ),
+            _ => return None,
+        };
+        Some(parsed.ok_or_else(|| {
+            self.err(
+                Some(place),
+                field,
+                format!("{} is not a {what}; expected one of {allowed}", v.value),
+            )
+        }))
     }
 }
 

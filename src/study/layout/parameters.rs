@@ -19,6 +19,14 @@ fn profile_name(p: &CaseParams) -> String {
         .to_string()
 }
 
+/// A label variable `name` (units `1`) with its `description` and one value per case.
+fn label(name: &str, description: &str, values: impl Iterator<Item = String>) -> Param {
+    Param {
+        spec: VarSpec::new(name, "1", description),
+        values: ParamValues::Str(values.collect()),
+    }
+}
+
 /// The `[case]` parameter variables of `cases`: the recorded parameters of the study's
 /// effects, then the labels (location, joint in a study with plain joints, design
 /// row, speed profile, defect race, fault).
@@ -30,33 +38,17 @@ pub(super) fn case_parameters(study: &Study, cases: &[&Case]) -> Vec<Param> {
             values: ParamValues::F64(cases.iter().map(|c| stored_value(p, &c.params)).collect()),
         })
         .collect();
-    parameters.push(Param {
-        spec: VarSpec::new(
-            "location",
-            "1",
-            "bearing location: ideal, crank_ground, crank_rod or rod_slider",
-        ),
-        values: ParamValues::Str(
-            cases
-                .iter()
-                .map(|c| c.params.location.name().to_string())
-                .collect(),
-        ),
-    });
+    parameters.push(label(
+        "location",
+        "bearing location: ideal, crank_ground, crank_rod or rod_slider",
+        cases.iter().map(|c| c.params.location.name().to_string()),
+    ));
     if study.has_plain_joints() {
-        parameters.push(Param {
-            spec: VarSpec::new(
-                "joint",
-                "1",
-                "joint at the location: ball_bearing, dry_clearance or lubricated",
-            ),
-            values: ParamValues::Str(
-                cases
-                    .iter()
-                    .map(|c| c.params.joint.name().to_string())
-                    .collect(),
-            ),
-        });
+        parameters.push(label(
+            "joint",
+            "joint at the location: ball_bearing, dry_clearance or lubricated",
+            cases.iter().map(|c| c.params.joint.name().to_string()),
+        ));
     }
     if let Some(d) = &study.design {
         parameters.push(Param {
