@@ -327,6 +327,7 @@ impl CartesianSliderCrank {
             crank_moment: -lambda[self.driver_row],
             crank_ground_force: joint(self.crank_ground_row).unwrap_or(reaction.force),
             crank_rod_force: joint(self.crank_rod_row).unwrap_or(reaction.force),
+            rod_slider_force: [f64::NAN; 2],
             eccentricity: reaction.eccentricity,
             loaded_balls: reaction.loaded_balls,
             housing_acceleration: [f64::NAN; 2],

@@ -483,6 +483,10 @@ pub struct Sample {
     /// Force transmitted at the crank–rod joint: on the crank from the rod (N,
     /// global); the bearing's `F` when the bearing is there.
     pub crank_rod_force: [f64; 2],
+    /// Force transmitted at the rod–slider joint: on the rod from the slider (N,
+    /// global); the bearing's `F` when the bearing is there. NaN from the Cartesian
+    /// reference, which has no rod_slider location.
+    pub rod_slider_force: [f64; 2],
     /// Bearing eccentricity `e` (m, global; zero for the ideal mechanism).
     pub eccentricity: [f64; 2],
     /// Number of loaded balls (0 for the ideal mechanism); for a plain journal 1
@@ -495,14 +499,13 @@ pub struct Sample {
 
 impl Sample {
     /// The force at the joint a bearing at `location` occupies (or would occupy),
-    /// so that bearing and ideal cases compare one to one. `None` for `Ideal`, and
-    /// for `RodSlider`, whose force the samples do not carry.
+    /// so that bearing and ideal cases compare one to one. `None` for `Ideal`.
     pub fn joint_force(&self, location: Location) -> Option<[f64; 2]> {
         match location {
             Location::Ideal => None,
             Location::CrankGround => Some(self.crank_ground_force),
             Location::CrankRod => Some(self.crank_rod_force),
-            Location::RodSlider => None,
+            Location::RodSlider => Some(self.rod_slider_force),
         }
     }
 }

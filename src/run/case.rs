@@ -403,7 +403,10 @@ pub const ECCENTRICITY_SLACK: f64 = 1e-6;
 ///   diameter `D = (d_o − d_i)/2`: a contact deflection of a tenth of the ball is far
 ///   beyond elastic (Hertz) contact of steel; the load is too high for the bearing.
 ///
-/// The ideal mechanism has no bearing and is not checked (docs/model.md §5.4).
+/// A plain journal ([`check_journal`]) has the radial clearance `c` for the gap, its
+/// contact stiffness for the Hertz penetration and a tenth of its radius for the
+/// elastic bound. The ideal mechanism has no bearing and is not checked
+/// (docs/model.md §5.4).
 pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), String> {
     if params.location == Location::Ideal {
         return Ok(());
@@ -423,6 +426,10 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
         }
     }
     let f_max = f.iter().copied().fold(0.0f64, f64::max);
+    let t = out.times.get(at).copied().unwrap_or(f64::NAN);
+    if params.joint.is_plain() {
+        return check_journal(params, e_max, t, f_max);
+    }
     let b = &params.bearing;
     let waviness: f64 = [&b.inner_waviness, &b.outer_waviness]
         .iter()
@@ -446,7 +453,6 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
     let consistent_bound = ECCENTRICITY_MARGIN * consistent + ECCENTRICITY_SLACK;
     let ball = 0.5 * (b.outer_race_diameter - b.inner_race_diameter);
     let elastic_bound = (gap + 0.1 * ball) / spacing + ECCENTRICITY_SLACK;
-    let t = out.times.get(at).copied().unwrap_or(f64::NAN);
     let um = |x: f64| x * 1e6;
     if e_max.is_nan() || e_max > consistent_bound {
         return Err(format!(
@@ -473,6 +479,32 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
             um(0.5 * b.clearance),
             um(profile),
             um(0.1 * ball),
+        ));
+    }
+    Ok(())
+}
+
+/// [`check_eccentricity`] of a plain journal whose eccentricity peaks at `e_max` (m)
+/// at `t` (s), the largest joint force `f_max` (N): `|e| ≤ 1.5 (c + (F_max/K)^{2/3})
+/// + 1 µm` and `|e| ≤ c + R_j/10 + 1 µm`.
+fn check_journal(params: &CaseParams, e_max: f64, t: f64, f_max: f64) -> Result<(), String> {
+    let j = &params.journal;
+    let c = j.geometry.clearance;
+    let hertz = (f_max / j.contact_stiffness()).powf(2.0 / 3.0);
+    let consistent = ECCENTRICITY_MARGIN * (c + hertz) + ECCENTRICITY_SLACK;
+    let elastic = c + 0.1 * j.geometry.radius + ECCENTRICITY_SLACK;
+    let um = |x: f64| x * 1e6;
+    if e_max.is_nan() || e_max > consistent.min(elastic) {
+        return Err(format!(
+            "physically impossible result: the journal centre moved |e| = {:.1} um from the \
+             bushing centre (t = {t:.4} s), more than the radial clearance (c = {:.1} um) and \
+             the Hertz penetration of the largest joint force ({f_max:.3e} N: {:.1} um) \
+             allow (bound {:.1} um), or a tenth of the journal radius beyond the clearance; \
+             the integration went wrong or the load is too high for the joint",
+            um(e_max),
+            um(c),
+            um(hertz),
+            um(consistent.min(elastic)),
         ));
     }
     Ok(())

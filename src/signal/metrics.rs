@@ -88,6 +88,8 @@ pub fn vibration_metrics(
         Location::RodSlider | Location::Ideal => None,
     };
     // The ideal mechanism has no bearing: no force to compare, nor a reference for it.
+    // The series hold no rod–slider force of the ideal mechanism: no statistics at
+    // rod_slider either.
     let bearing_force = joint.map_or(
         Deviation {
             rms: f64::NAN,

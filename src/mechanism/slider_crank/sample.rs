@@ -82,11 +82,17 @@ impl SliderCrank {
                 on_crank_from_rod[1] - k.m2 * (crank_dd[1] + k.g),
             ],
         };
+        // On the rod from the slider: the rod's balance m3 r̈3 = R + S + m3 g.
+        let on_rod_from_slider = match self.location {
+            Location::RodSlider => f,
+            _ => [k.m3 * rod_dd[0] - rx, k.m3 * (rod_dd[1] + k.g) - ry],
+        };
         Sample {
             slider_acceleration: slider_dd,
             crank_moment: 0.0,
             crank_ground_force: on_ground_from_crank,
             crank_rod_force: on_crank_from_rod,
+            rod_slider_force: on_rod_from_slider,
             eccentricity: if self.has_joint() {
                 [y[0], y[1]]
             } else {
