@@ -9,6 +9,7 @@ pub mod channel;
 pub mod envelope;
 pub mod fault_frequencies;
 pub mod indicators;
+mod lag_table;
 pub mod metrics;
 pub mod order;
 pub mod replicates;
