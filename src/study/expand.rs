@@ -7,7 +7,8 @@ use serde_saphyr::Location;
 
 use super::config::{
     BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
-    Scalar, SensorSection, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
+    RecordingSection, Scalar, SensorSection, SeriesValue, SpectraSection, SpeedSection,
+    WavinessSection, S,
 };
 use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -22,6 +23,7 @@ mod ctx;
 mod design;
 mod effects;
 mod memory_check;
+mod recordings;
 mod references;
 mod replicates;
 mod sensors;
@@ -63,6 +65,10 @@ type Provenance = Vec<(&'static str, String, (u64, u64))>;
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file = parse(&ctx, text)?;
+    if file.recordings.is_some() {
+        return recordings::build_recordings(&ctx, file, text, limits);
+    }
+    refuse_recording_keys(&ctx, &file)?;
     check_name(&ctx, &file.name)?;
     let sampling = sampling_of(&ctx, &file)?;
     let effects = effects(&ctx, &file)?;
@@ -91,7 +97,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         None => Vec::new(),
     };
     sensors::check_realizations(&ctx, &sensors, &cases)?;
-    let analysed = (&sensors[..], &effects);
+    let analysed = Analysed::Simulated(&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
     let max_frequency = analysis::max_frequency(&ctx, file.spectra.as_ref(), &sampling)?;
     let envelope = file
@@ -132,11 +138,30 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         revolutions,
         sensors: Vec::new(),
         output: SeriesOutput::default(),
+        recordings: None,
     };
     let (list, output) = (file.sensors.as_ref(), file.output.as_ref());
     add_outputs(&ctx, list, output, &mut study, sensors)?;
     memory_check::check_study(&ctx, &places, &study, limits)?;
     Ok(study)
+}
+
+/// Refuses the keys of a `recordings:` study (`window`, `series`) in a study of
+/// simulated cases.
+fn refuse_recording_keys(ctx: &Ctx<'_>, file: &GridFile) -> Result<(), StudyError> {
+    let given = [
+        ("window", file.window.as_ref().map(|w| at(&w.referenced))),
+        ("series", file.series.as_ref().map(|s| at(&s.referenced))),
+    ];
+    match given.into_iter().find(|(_, place)| place.is_some()) {
+        Some((key, place)) => Err(ctx.err(
+            place,
+            key,
+            "only a study with `recordings:` takes it; a simulated study's analysed \
+             window is `transient` to `duration`",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The most whole revolutions of any of `cases` between `transient` and `duration` (s).
@@ -241,7 +266,7 @@ fn check_samples_per_revolution(
         return Ok(());
     }
     Err(ctx.err(
-        Some(at(&file.sample_rate.referenced)),
+        Some(memory_check::sample_rate_place(file)),
         "grid",
         format!(
             "a case turns the crank {revolutions} times after the transient but is sampled \
