@@ -27,29 +27,16 @@ pub(super) fn run_recording(
 ) -> CaseResult {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
-    let recordings = study.recordings.as_ref().expect("a recordings study");
-    let recording = &recordings.list[case.id as usize];
-    let n = study.sampling.len();
-    let read = read_samples(&recording.file, &recording.selector)
-        .map_err(|e| e.to_string())
-        .and_then(|s| match s.values.len() >= n {
-            true => Ok(s.values),
-            false => Err(format!(
-                "{}: holds {} samples, the study analyses {n}",
-                recording.file.display(),
-                s.values.len()
-            )),
-        });
+    let read = read_window(study, case);
     let cpu_read = thread_cpu();
     let mut cost = CaseCost {
         simulate: cpu_read - cpu_start,
         analysis: 0.0,
     };
-    let mut series = match read {
+    let series = match read {
         Ok(values) => values,
         Err(message) => return failed(study, row, message, cost, start),
     };
-    series.truncate(n);
     // The recording's times are the study's sample times: the file keeps no others.
     let out = CaseOutput {
         location: Location::CrankGround,
@@ -98,4 +85,25 @@ pub(super) fn run_recording(
         replicate_messages: Vec::new(),
         cost,
     }
+}
+
+/// The first [`Study::sampling`] samples of the recording of `case`; the error says
+/// why the file cannot give them (read again here: it may have changed since the
+/// study was loaded).
+fn read_window(study: &Study, case: &Case) -> Result<Vec<f64>, String> {
+    let recordings = study.recordings.as_ref().expect("a recordings study");
+    let recording = &recordings.list[case.id as usize];
+    let n = study.sampling.len();
+    let mut values = read_samples(&recording.file, &recording.selector)
+        .map_err(|e| e.to_string())?
+        .values;
+    if values.len() < n {
+        return Err(format!(
+            "{}: holds {} samples, the study analyses {n}",
+            recording.file.display(),
+            values.len()
+        ));
+    }
+    values.truncate(n);
+    Ok(values)
 }

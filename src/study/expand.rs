@@ -65,25 +65,35 @@ type Provenance = Vec<(&'static str, String, (u64, u64))>;
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file = parse(&ctx, text)?;
-    if file.recordings.is_some() {
-        return recordings::build_recordings(&ctx, file, text, limits);
+    match file.recordings {
+        Some(_) => recordings::build_recordings(&ctx, file, text, limits),
+        None => build_simulated(&ctx, file, text, limits),
     }
-    refuse_recording_keys(&ctx, &file)?;
-    check_name(&ctx, &file.name)?;
-    let sampling = sampling_of(&ctx, &file)?;
-    let effects = effects(&ctx, &file)?;
+}
+
+/// [`build`] for a study of simulated cases, its grid `file` parsed from `text`.
+fn build_simulated(
+    ctx: &Ctx<'_>,
+    file: GridFile,
+    text: &str,
+    limits: &Limits,
+) -> Result<Study, StudyError> {
+    refuse_recording_keys(ctx, &file)?;
+    check_name(ctx, &file.name)?;
+    let sampling = sampling_of(ctx, &file)?;
+    let effects = effects(ctx, &file)?;
     let mut prov = Provenance::new();
-    let base = base_case(&ctx, &file, &effects, &mut prov)?;
-    let solver = solver(&ctx, &file, &sampling)?;
-    let (groups, axes_names) = axis_groups(&ctx, &file)?;
-    let rows = design::rows(&ctx, &file)?;
-    let (total, count) = case_count(&ctx, &file, &groups, rows)?;
+    let base = base_case(ctx, &file, &effects, &mut prov)?;
+    let solver = solver(ctx, &file, &sampling)?;
+    let (groups, axes_names) = axis_groups(ctx, &file)?;
+    let rows = design::rows(ctx, &file)?;
+    let (total, count) = case_count(ctx, &file, &groups, rows)?;
     // Before the design is drawn: its values are rows × parameters.
     let places = memory_check::Places::of(&file);
     let mut known = known_before_expansion(&file, &sampling, total, rows);
-    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
+    memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let (mut cases, design) = expand_cases(
-        &ctx,
+        ctx,
         &file,
         (&base, &prov),
         &effects,
@@ -91,33 +101,33 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         (total, count),
     )?;
     let references = assign_references(&mut cases);
-    let transient = transient_of(&ctx, &file, &sampling, &cases)?;
+    let transient = transient_of(ctx, &file, &sampling, &cases)?;
     let sensors = match &file.sensors {
-        Some(list) => sensors::sensors(&ctx, list, &sampling, &effects)?,
+        Some(list) => sensors::sensors(ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
-    sensors::check_realizations(&ctx, &sensors, &cases)?;
+    sensors::check_realizations(ctx, &sensors, &cases)?;
     let analysed = Analysed::Simulated(&sensors[..], &effects);
-    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
-    let max_frequency = analysis::max_frequency(&ctx, file.spectra.as_ref(), &sampling)?;
+    let (window, spectrum_channels) = spectra_settings(ctx, file.spectra.as_ref(), analysed)?;
+    let max_frequency = analysis::max_frequency(ctx, file.spectra.as_ref(), &sampling)?;
     let envelope = file
         .envelope
         .as_ref()
-        .map(|e| envelope_settings(&ctx, e, &sampling, transient, analysed))
+        .map(|e| envelope_settings(ctx, e, &sampling, transient, analysed))
         .transpose()?;
-    let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
-    let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
-    let (replicates, chaos_check) = replicates::resolve(&ctx, &file, &cases)?;
+    let orders = order_settings(ctx, &file, &sampling, transient, &cases)?;
+    let (float32, compression) = output_settings(ctx, file.output.as_ref())?;
+    let (replicates, chaos_check) = replicates::resolve(ctx, &file, &cases)?;
     let revolutions = most_revolutions(&cases, transient, sampling.duration);
-    check_samples_per_revolution(&ctx, &file, revolutions, &sampling)?;
+    check_samples_per_revolution(ctx, &file, revolutions, &sampling)?;
     known.references = references.len() as u64;
     known.revolutions = revolutions as u64;
-    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
+    memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let mut study = Study {
         name: file.name.value,
         description: file.description.unwrap_or_default(),
         source: text.to_string(),
-        path: path.to_path_buf(),
+        path: ctx.path.to_path_buf(),
         sampling,
         solver,
         effects,
@@ -141,8 +151,8 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         recordings: None,
     };
     let (list, output) = (file.sensors.as_ref(), file.output.as_ref());
-    add_outputs(&ctx, list, output, &mut study, sensors)?;
-    memory_check::check_study(&ctx, &places, &study, limits)?;
+    add_outputs(ctx, list, output, &mut study, sensors)?;
+    memory_check::check_study(ctx, &places, &study, limits)?;
     Ok(study)
 }
 
