@@ -65,6 +65,7 @@ type Provenance = Vec<(&'static str, String, (u64, u64))>;
 pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file = parse(&ctx, text)?;
+    check_name(&ctx, &file.name)?;
     match file.recordings {
         Some(_) => recordings::build_recordings(&ctx, file, text, limits),
         None => build_simulated(&ctx, file, text, limits),
@@ -78,8 +79,6 @@ fn build_simulated(
     text: &str,
     limits: &Limits,
 ) -> Result<Study, StudyError> {
-    refuse_recording_keys(ctx, &file)?;
-    check_name(ctx, &file.name)?;
     let sampling = sampling_of(ctx, &file)?;
     let effects = effects(ctx, &file)?;
     let mut prov = Provenance::new();
@@ -115,17 +114,15 @@ fn build_simulated(
         .as_ref()
         .map(|e| envelope_settings(ctx, e, &sampling, transient, analysed))
         .transpose()?;
-    let orders = order_settings(ctx, &file, &sampling, transient, &cases)?;
     let (float32, compression) = output_settings(ctx, file.output.as_ref())?;
     let (replicates, chaos_check) = replicates::resolve(ctx, &file, &cases)?;
     let revolutions = most_revolutions(&cases, transient, sampling.duration);
     check_samples_per_revolution(ctx, &file, revolutions, &sampling)?;
-    known.references = references.len() as u64;
-    known.revolutions = revolutions as u64;
+    (known.references, known.revolutions) = (references.len() as u64, revolutions as u64);
     memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let mut study = Study {
-        name: file.name.value,
-        description: file.description.unwrap_or_default(),
+        name: file.name.value.clone(),
+        description: file.description.clone().unwrap_or_default(),
         source: text.to_string(),
         path: ctx.path.to_path_buf(),
         sampling,
@@ -136,7 +133,7 @@ fn build_simulated(
         spectrum_channels,
         max_frequency,
         envelope,
-        orders,
+        orders: order_settings(ctx, &file, &sampling, transient, &cases)?,
         float32,
         compression,
         axes: axes_names,

@@ -84,9 +84,10 @@ pub(super) fn order_settings(
     }))
 }
 
-/// `duration` and `sample_rate`, checked; both required (a study without
-/// `recordings:`).
+/// `duration` and `sample_rate`, checked; both required, and `window` refused (a
+/// study without `recordings:`).
 pub(super) fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, StudyError> {
+    super::refuse_recording_keys(ctx, file)?;
     let required = |v: &Option<S<Scalar>>, field: &str| {
         v.clone().ok_or_else(|| {
             ctx.err(

@@ -21,7 +21,6 @@ pub(super) fn build_recordings(
     text: &str,
     limits: &Limits,
 ) -> Result<Study, StudyError> {
-    check_name(ctx, &file.name)?;
     refuse_simulation_keys(ctx, &file)?;
     let bearing = recording_bearing(ctx, &file)?;
     let list = file.recordings.as_ref().expect("a recordings study");
