@@ -18,6 +18,7 @@ sample_rate: 12000
 transient: 0.05
 effects: [clearance, damping, defects]
 rpm: 1800
+envelope: {channels: [bearing_force_y], band: auto}
 bearing: {defects: [{race: outer, angle: "0 deg", width: "1 mm", depth: "20 um", profile: flat}]}
 grid: {defect_race: [outer, inner]}
 cases: [{defect_depth: 0}]
@@ -80,3 +81,22 @@ def test_a_simulated_and_a_measured_study_window_together(studies):
     with pytest.raises(ValueError, match="different rates"):
         make_joint_splits([("a", sim, "bearing_force_y"), ("b", rec.assign_attrs(series_sample_rate=6000.0),
                                                            "vibration")], length=512, hop=256)
+
+
+def test_report_draws_a_recordings_study_beside_a_simulated_one(studies, tmp_path, assert_png):
+    """report.py draws the recordings' envelope spectra with the fault lines and their
+    kurtograms with the chosen band, and, given the simulated study, one figure per
+    shared fault with a measured and a simulated case side by side."""
+    from analysis import report
+
+    out = tmp_path / "report"
+    index = report.report(studies / "rec.h5", out, simulated=studies / "sim.h5").read_text(encoding="utf-8")
+    names = sorted(p.name for p in out.glob("*.png"))
+    assert "envelope_vibration_1800rpm.png" in names, names
+    assert [n for n in names if n.startswith("kurtogram_vibration")] == [
+        f"kurtogram_vibration_1800rpm_{label}.png" for label in ("inner", "none", "outer")]
+    assert [n for n in names if n.startswith("measured_simulated")] == [
+        f"measured_simulated_{label}.png" for label in ("inner", "none", "outer")]
+    for name in names:
+        assert f"({name})" in index
+        assert_png(out / name, min_kb=10, min_pixels=150)
