@@ -93,7 +93,10 @@ pub(super) fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, St
             ctx.err(
                 None,
                 field,
-                format!("missing: a study of simulated cases needs `{field}` (a study listing `recordings:` takes it from them)"),
+                format!(
+                    "the required field `{field}` is missing (a study listing `recordings:` \
+                     takes it from them)"
+                ),
             )
         })
     };
