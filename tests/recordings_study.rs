@@ -139,6 +139,10 @@ fn the_file_holds_the_recordings_and_no_reference() {
     let out = crate::common::studyrun_ok(dir.path(), &["inspect", "rig.h5"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("3 ok, 0 failed"), "{text}");
+    assert!(
+        text.contains("solver:   none (measured recordings"),
+        "{text}"
+    );
 }
 
 /// One worker, two, and two shards merged write the same bits.
@@ -332,6 +336,40 @@ fn bad_recordings_are_refused_naming_recording_and_field() {
     let err = crate::common::refused("name: s\nsample_rate: 1000\n");
     assert!(
         err.contains("`duration`") && err.contains("missing"),
+        "{err}"
+    );
+}
+
+/// With a known speed a recording gets order spectra: the squared envelope's order
+/// spectrum of the outer-race recording peaks at the BPFO order (BPFO / 30 Hz =
+/// 3.585 cycles per revolution) among the orders up to 5; a recording without a speed
+/// makes order spectra refused.
+#[test]
+fn order_spectra_of_a_recording_with_a_speed() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = HEAD.replace("band: auto}", "band: auto, orders: true}");
+    let reader = crate::common::run_study(dir.path(), "orders", &format!("{head}{}", recordings()));
+    let l = reader.layout();
+    let names: Vec<&str> = l.order_spectra.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["vibration_envelope_order_spectrum"]);
+    let case = reader.read_case(0).unwrap();
+    let spectrum = &case.metrics[l.metrics.len()..];
+    assert_eq!(spectrum.len(), l.orders.len());
+    let peak = (0..l.orders.len())
+        .filter(|&k| l.orders[k] > 1.0 && l.orders[k] < 5.0)
+        .max_by(|&a, &b| spectrum[a].total_cmp(&spectrum[b]))
+        .unwrap();
+    let bpfo_order = metric(&reader, 0, "bpfo_order");
+    assert!(
+        (l.orders[peak] - bpfo_order).abs() < 0.1,
+        "peak at {} vs {bpfo_order}",
+        l.orders[peak]
+    );
+    let no_speed =
+        format!("{head}{}", recordings()).replace(", rpm: 1800, fault: outer", ", fault: outer");
+    let err = crate::common::refused(&no_speed);
+    assert!(
+        err.contains("`envelope.orders`") && err.contains("case 0"),
         "{err}"
     );
 }
