@@ -208,6 +208,22 @@ fn window_series_and_contact_angle() {
         freqs.bpfi
     );
     assert!((b.contact_angle - 30f64.to_radians()).abs() < 1e-15);
+    // A speed profile per recording: its lines move (NaN), its fields are recorded.
+    let ramp = format!("{HEAD}{}", recordings()).replacen(
+        "rpm: 1800, fault: outer",
+        "speed: {profile: ramp, from: 1200, to: 1800, over: 0.5}, fault: outer",
+        1,
+    );
+    let study = crate::common::study(&ramp);
+    let p = &study.cases[0].params;
+    assert_eq!(p.speed.as_ref().map(|s| s.name()), Some("ramp"));
+    let lines = studyrun::signal::fault_frequencies::FaultFrequencies::of(p);
+    assert!(lines.bpfo.is_nan() && study.cases[1].params.constant_rpm() == Some(1800.0));
+    let layout = studyrun::study::study_layout(&study, &[0, 1, 2], None);
+    assert!(layout
+        .parameters
+        .iter()
+        .any(|q| q.spec.name == "speed_from"));
     let err = crate::common::refused(
         "name: s\nduration: 0.1\nsample_rate: 1000\nbearing: {geometry: {contact_angle: \"10 deg\"}}\n",
     );
