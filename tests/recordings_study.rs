@@ -389,3 +389,57 @@ fn order_spectra_of_a_recording_with_a_speed() {
         "{err}"
     );
 }
+
+/// The 14 MFPT recordings (`../shared/data/mfpt`, never part of the repository; the
+/// test says SKIPPED without them) as a recordings study read from their MAT files:
+/// the characteristic orders are the data set README's (BPFO 3.245, BPFI 4.755, BSF
+/// 2.556, FTF 0.406 per shaft revolution, to 0.002), and with `band: auto` the
+/// labelled fault's band energy is the largest of BPFO, BPFI and 2·BSF in all 14.
+#[test]
+fn mfpt_recordings_study_names_every_fault() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/mfpt");
+    if !data.is_dir() {
+        println!("SKIPPED: {} absent", data.display());
+        return;
+    }
+    let mut text = String::from(
+        "name: mfpt\n\
+bearing: {ball_count: 8, geometry: {ball_diameter: \"5.969 mm\", pitch_diameter: \"31.623 mm\"}}\n\
+envelope: {channels: [vibration], band: auto}\n\
+output: {series: none}\n\
+recordings:\n",
+    );
+    let mut labels = Vec::new();
+    for (prefix, fault, line) in [
+        ("InnerRaceFault", "inner", "bpfi"),
+        ("OuterRaceFault", "outer", "bpfo"),
+    ] {
+        for load in 1..=7 {
+            let file = data.join(format!("{prefix}_vload_{load}.mat"));
+            text += &format!(
+                "- {{file: {}, variable: bearing.gs, sample_rate: \"48828 Hz\", rpm: 1500, fault: {fault}}}\n",
+                file.display()
+            );
+            labels.push(line);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let reader = crate::common::run_study(dir.path(), "mfpt", &text);
+    for (name, want) in [
+        ("bpfo_order", 3.245),
+        ("bpfi_order", 4.755),
+        ("bsf_order", 2.556),
+        ("ftf_order", 0.406),
+    ] {
+        let got = metric(&reader, 0, name);
+        assert!((got - want).abs() < 2e-3, "{name}: {got} vs {want}");
+    }
+    for (row, labelled) in labels.iter().enumerate() {
+        let energy = |l: &str| metric(&reader, row, &format!("vibration_envelope_energy_{l}"));
+        let largest = ["bpfo", "bpfi", "2bsf"]
+            .into_iter()
+            .max_by(|a, b| energy(a).total_cmp(&energy(b)))
+            .unwrap();
+        assert_eq!(largest, *labelled, "row {row}");
+    }
+}
