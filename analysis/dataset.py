@@ -22,6 +22,10 @@ stores every k-th sample (rate `series_sample_rate`), so L and H count stored sa
 A file without series (`output.series: none`) has nothing to window: `make_splits`
 says so.
 
+`make_joint_splits` windows several studies together, e.g. a simulated study and a
+study of measured recordings (docs/grid-file.md, Recordings), each through its own
+series, into one data set whose labels share one class list.
+
 PyTorch is imported only by `torch_dataset`, never on import of this module, and is
 not a requirement of the analysis package.
 """
@@ -30,7 +34,7 @@ import warnings
 
 import numpy as np
 
-from analysis.studyfile import analysis_window
+from analysis.studyfile import analysis_window, series_rate
 
 SPLITS = ("train", "validation", "test")
 """The splits, in the order of `fractions`."""
@@ -236,6 +240,48 @@ def make_splits(ds, channels, length, hop, labels=("location",), parameters=None
         out[name] = WindowSet(x.astype(dtype), np.repeat(cases, per_series), np.tile(starts, rows.size),
                               label_values, codes, classes, np.repeat(case_params[rows], per_series, axis=0),
                               parameters, channels)
+    return out
+
+
+def make_joint_splits(studies, length, hop, labels=("fault",), fractions=(0.7, 0.15, 0.15), seed=0,
+                      analysed_only=True, dtype=np.float32, stratify=None):
+    """{split: WindowSet} of several studies windowed together, labels aligned.
+
+    `studies`: (name, ds, channel) triples, e.g. ("simulated", sim, "acc") and
+    ("measured", rec, "vibration"): each study's windows are cut from its own series
+    `channel` as `make_splits` cuts them (its cases split on their own, so each study
+    is in every split), then stacked, the studies in the given order. The result's one
+    channel is named after each study's series joined by `|`; its labels are `labels`
+    (per-case variables every study has, e.g. `fault`) and `study` (the name), their
+    classes the union over the studies, so that a code means one class whichever
+    study a window comes from; `case` holds each window's case id in its own study.
+    No parameters are carried (the studies' parameters differ). Raises ValueError when
+    the studies' series are sampled at different rates (a window of L samples would
+    not span one time), and as `make_splits` does.
+    """
+    studies = list(studies)
+    if not studies:
+        raise ValueError("no study to window")
+    rates = {name: series_rate(ds) for name, ds, _ in studies}
+    if len(set(rates.values())) > 1:
+        raise ValueError(f"the studies' series are sampled at different rates {rates} (Hz): windows of "
+                         f"{length} samples would span different times; run them at one sample rate")
+    parts = [(name, make_splits(ds, [channel], length, hop, labels=labels, parameters=[], fractions=fractions,
+                                seed=seed, analysed_only=analysed_only, dtype=dtype, stratify=stratify))
+             for name, ds, channel in studies]
+    channel = "|".join(channel for _, _, channel in studies)
+    classes = {n: np.unique(np.concatenate([p[SPLITS[0]].classes[n] for _, p in parts]))
+               for n in parts[0][1][SPLITS[0]].classes}
+    classes["study"] = np.unique([name for name, _, _ in studies])
+    out = {}
+    for split in SPLITS:
+        sets = [(name, p[split]) for name, p in parts]
+        values = {n: np.concatenate([w.labels[n] for _, w in sets]) for n in labels}
+        values["study"] = np.concatenate([np.full(len(w), name) for name, w in sets])
+        codes = {n: np.searchsorted(classes[n], values[n]).astype(np.int64) for n in classes}
+        out[split] = WindowSet(np.concatenate([w.x for _, w in sets]), np.concatenate([w.case for _, w in sets]),
+                               np.concatenate([w.start for _, w in sets]), values, codes, classes,
+                               np.empty((sum(len(w) for _, w in sets), 0)), [], [channel])
     return out
 
 

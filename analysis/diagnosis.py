@@ -70,7 +70,11 @@ class FaultOrders:
 def fault_orders(ds, case):
     """FTF, BPFO, BPFI and BSF of `case` per crank revolution, from its location,
     ball count and raceway diameters (docs/model.md §7.3: the mean race speeds at
-    1 rev/s). Raises ValueError for an `ideal` case (no bearing)."""
+    1 rev/s). A recordings study's file has no location: its stored `*_order`
+    variables are read (from its `bearing.geometry`, contact angle included). Raises
+    ValueError for an `ideal` case (no bearing)."""
+    if "location" not in ds and "bpfo_order" in ds:
+        return FaultOrders(**{k: float(ds[f"{k}_order"].values[case]) for k in ("ftf", "bpfo", "bpfi", "bsf")})
     omega_i, omega_o = race_speeds(text(ds["location"].values[case]), 60.0)
     d_i = parameter_value(ds, "inner_race_diameter", case)
     d_o = parameter_value(ds, "outer_race_diameter", case)

@@ -166,6 +166,35 @@ def envelope_spectra(ds, channel, cases, out, f_max=None, sidebands=2, dpi=90):
     return _save(fig, out, dpi)
 
 
+def measured_beside_simulated(measured, simulated, out, dpi=90):
+    """A measured case and a simulated case of the same fault side by side: each
+    `(ds, channel, case)`'s envelope spectrum (`case_envelope`: the file's, in the band
+    it records) up to 2.2 × its largest line, with its own FTF, BPFO, BPFI, BSF and
+    2·BSF (docs/model.md §7.3) marked; each panel scaled to its own largest value, the
+    two studies' units and speeds differing."""
+    fig, axes = _panels(2, width=6.0, height=3.6)
+    for ax, (what, (ds, channel, case)) in zip(axes, (("measured", measured), ("simulated", simulated))):
+        lines, f_shaft = _line_frequencies(ds, case)
+        freq, spectrum, (low, high), _ = case_envelope(ds, channel, case)
+        top = 2.2 * max(lines.values())
+        band = (freq > 0) & (freq <= top)
+        ax.plot(freq[band], spectrum[band], color="k", lw=0.9, label=f"{channel}, {fault_label(ds, case)}")
+        for line, f in lines.items():
+            ax.axvline(f, color=LINE_COLOURS[line], ls="--", lw=0.9, label=f"{line} {f:.1f} Hz")
+        study = ds.attrs.get("study_name", "")
+        ax.set_title(f"{what} ({study}, case {int(ds['case'].values[case])}): band {low:g}–{high:g} Hz, "
+                     f"f_shaft = {f_shaft:g} Hz", fontsize=9)
+        ax.set_xlim(0, top)
+        ax.set_ylim(0, 1.6 * np.nanmax(spectrum[band]))
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel(f"envelope amplitude ({squared_unit_text(ds, channel)})")
+        ax.grid(alpha=0.3, lw=0.4)
+        ax.legend(fontsize=6, loc="upper right", ncol=2)
+    fig.suptitle(f"Measured and simulated envelope spectra, fault {fault_label(*measured[::2])}", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, out, dpi)
+
+
 CONTENT_SHARE = 0.995
 """The share of a series' power a raw spectrogram's frequency axis holds (`content_top`)."""
 

@@ -711,13 +711,93 @@ def check_channels(ds, channels):
         raise ValueError(f"--channels {bad[0]}: not a series of the file; allowed: {', '.join(allowed)}")
 
 
-def report(study, outdir, channels=figures.PANEL_CHANNELS, max_groups=16, dpi=90, selections=()):
+def is_recordings_file(path):
+    """Whether the study file `path` is a recordings study's (docs/result-file.md,
+    Recordings: it has `recording_file`)."""
+    with open_study(path) as ds:
+        return "recording_file" in ds
+
+
+def recording_groups(ds):
+    """{'<rpm> rpm': {fault label: case}} of the ok cases at a constant speed, the first
+    case of each label per speed."""
+    groups = {}
+    for case in np.flatnonzero(ds["status"].values == 1):
+        rpm = constant_rpm(ds, case)
+        if np.isfinite(rpm):
+            groups.setdefault(f"{rpm:g} rpm", {}).setdefault(dfig.fault_label(ds, case), int(case))
+    return groups
+
+
+def render_recordings(ds, outdir, index, dpi, simulated=None):
+    """The figures of a recordings study, drawn as a simulated study's diagnosis is:
+    per envelope channel and constant speed the envelope spectra with the fault lines,
+    and per case of the first speed its kurtogram with the band chosen; with a
+    `simulated` study file open, per fault label a measured case beside a simulated
+    case of that fault (its first envelope channel)."""
+    index.section("Recordings: envelope spectra, kurtogram, measured beside simulated")
+    channels = envelope_channels(ds)
+    groups = recording_groups(ds)
+    if not channels or not groups:
+        index.note("No `envelope:` or no ok recording at a constant speed: no envelope figures.")
+        return
+    for channel in channels:
+        for name, cases in groups.items():
+            out = outdir / f"envelope_{channel}_{slug_text(name)}.png"
+            _draw(index, f"envelope spectra of {channel}, {name}",
+                  lambda: dfig.envelope_spectra(ds, channel, cases, out, dpi=dpi),
+                  f"envelope spectra of the recordings' {channel} at {name}, in the band the file records, one "
+                  "panel per fault label (healthy grey); dashed: FTF, BPFO, BPFI, BSF, 2·BSF from the bearing's "
+                  "geometry; dotted: shaft sidebands around the panel's fault line.")
+        first = next(iter(groups))
+        for label, case in groups[first].items():
+            out = outdir / f"kurtogram_{channel}_{slug_text(first)}_{slug_text(label)}.png"
+            _draw(index, f"kurtogram, {label}", lambda: dfig.kurtogram(ds, channel, case, out, dpi=dpi),
+                  f"fast kurtogram of the recording's {channel} ({first}, {label}); white: its largest kurtosis, "
+                  "cyan dashed: the band the file records (band: as the grid's envelope.band chose it).")
+    if simulated is None:
+        return
+    s_channels = envelope_channels(simulated)
+    s_cases = [c for c in np.flatnonzero(simulated["status"].values == 1)
+               if np.isfinite(constant_rpm(simulated, c)) and (
+                   "location" not in simulated or text(simulated["location"].values[c]) != "ideal")]
+    for label, case in next(iter(groups.values())).items():
+        match = [c for c in s_cases if dfig.fault_label(simulated, c) == label]
+        if not s_channels or not match:
+            index.note(f"{label}: no simulated case of this fault with an envelope channel to set beside it.")
+            continue
+        out = outdir / f"measured_simulated_{slug_text(label)}.png"
+        _draw(index, f"measured beside simulated, {label}",
+              lambda: dfig.measured_beside_simulated((ds, channels[0], case),
+                                                     (simulated, s_channels[0], int(match[0])), out, dpi=dpi),
+              f"fault {label}: the measured recording's envelope spectrum (left) beside the simulated case's "
+              f"(right, {s_channels[0]}), each with its own characteristic lines.")
+
+
+def report(study, outdir, channels=figures.PANEL_CHANNELS, max_groups=16, dpi=90, selections=(), simulated=None):
     """Render all figures of the study file `study` into `outdir` and write
     `outdir/index.md`; returns the index's path. `channels`: the series of the panels
     and spectra, each a PANEL_CHANNELS entry (with the ideal mechanism's) or any other
-    series the file stores, e.g. a sensor's (alone)."""
+    series the file stores, e.g. a sensor's (alone). A recordings study's file
+    (`is_recordings_file`) gets `render_recordings`, with the simulated study file
+    `simulated` (if given) set beside it fault by fault."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
+    if is_recordings_file(study):
+        with open_study(study) as full:
+            ds = restrict(full, selections)
+            index = Index(f"Study `{ds.attrs.get('study_name', Path(study).stem)}` (recordings)")
+            index.lines += [ds.attrs.get("study_description", ""), "",
+                            f"- recordings: {ds.sizes['case']}, analysed {ds.sizes['time'] - 1} samples at "
+                            f"{float(ds.attrs['sample_rate']):g} Hz", ""]
+            if simulated is None:
+                render_recordings(ds, outdir, index, dpi)
+            else:
+                with open_study(simulated) as sim:
+                    render_recordings(ds, outdir, index, dpi, sim)
+        path = outdir / "index.md"
+        index.write(path)
+        return path
     with open_study(study) as full:
         check_channels(full, channels)
         ds = with_constant_rpm(mark_healthy(restrict(full, selections)))
@@ -748,10 +828,14 @@ def main(argv=None):
     parser.add_argument("--max-groups", type=int, default=16,
                         help="at most this many parameter combinations get panels and spectra (default 16)")
     parser.add_argument("--dpi", type=int, default=90, help="resolution of the PNGs (default 90)")
+    parser.add_argument("--simulated", metavar="FILE",
+                        help="for a recordings study: a simulated study file whose cases are set beside the "
+                             "recordings of the same fault")
     args = parser.parse_args(argv)
     study_file_or_exit("report", args.study)
     try:
-        path = report(args.study, args.outdir, args.channels, args.max_groups, args.dpi, args.select)
+        path = report(args.study, args.outdir, args.channels, args.max_groups, args.dpi, args.select,
+                      args.simulated)
     except ValueError as e:
         raise SystemExit(f"report: {e}") from None
     print(path)

@@ -270,7 +270,7 @@ def _shard_part(ds, refs=None):
     ds = written_times(ds)
     for var in ds.variables.values():
         var.attrs.pop(STRINGS_CHECKSUM, None)
-    if refs is not None and "reference" in ds.dims:
+    if refs is not None and "reference_index" in ds:
         index = ds["reference_index"]
         ids = ds["reference"].values[index.values.astype("int64")]
         rows = np.searchsorted(refs["reference"].values, ids)

@@ -13,8 +13,8 @@ use serde::de::{self, Deserialize, Deserializer, Visitor};
 use studyrun::study::config::{
     BearingSection, DefectSection, DesignParameter, DesignSection, EnvelopeSection,
     FrictionSection, GeometrySection, GridFile, HarmonicSection, HousingSection, JournalSection,
-    MechanismSection, NoiseSection, OutputSection, ReplicatesSection, SensorSection, SolverSection,
-    SpectraSection, SpeedSection, WavinessSection,
+    MechanismSection, NoiseSection, OutputSection, RecordingSection, ReplicatesSection,
+    SensorSection, SolverSection, SpectraSection, SpeedSection, WavinessSection,
 };
 use studyrun::study::params::PARAMETERS;
 use studyrun::study::units::Dimension;
@@ -256,6 +256,7 @@ fn the_key_tables_hold_exactly_the_keys_of_the_grid_file() {
     expected.extend(keys_of::<ReplicatesSection>("replicates."));
     expected.extend(keys_of::<SensorSection>("sensors[]."));
     expected.extend(keys_of::<NoiseSection>("sensors[].noise."));
+    expected.extend(keys_of::<RecordingSection>("recordings[]."));
     assert!(expected.contains("bearing.waviness.amplitude") && expected.contains("zip"));
 
     let doc = grid_file_doc();

@@ -22,7 +22,7 @@ fn without_envelope_nothing_is_stored_and_the_rest_is_bit_identical() {
     let (lp, lw) = (plain.layout(), with.layout());
     // The plain file holds exactly the metrics and spectra of a study without
     // `envelope:` and no envelope attribute.
-    assert_eq!(lp.metrics, metric_specs(None));
+    assert_eq!(lp.metrics, metric_specs(None, true));
     let names: Vec<&str> = lp
         .metrics
         .iter()

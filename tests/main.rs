@@ -35,6 +35,7 @@ mod output_selection;
 mod parity;
 mod per_revolution;
 mod properties;
+mod recordings_study;
 mod refusals;
 mod replicates;
 mod sensors;

@@ -51,7 +51,7 @@ fn replicate_zero_is_the_study_without_replicates() {
     assert_eq!(lr.metrics[..lp.metrics.len()], lp.metrics[..]);
     let chosen = replicated_metrics();
     assert_eq!(lr.replicate_metrics.len(), chosen.len());
-    let wall = metric_specs(None).len() - 1;
+    let wall = metric_specs(None, true).len() - 1;
     let n_scalar = lr.metrics.len();
     let position = |name: &str| lr.metrics.iter().position(|m| m.name == name).unwrap();
     for row in 0..lp.n_cases() {

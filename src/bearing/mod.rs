@@ -130,6 +130,10 @@ pub struct BearingParams {
     /// Ball diameter `D` (m): the radius `R_b = D/2` of the balls rolling over a
     /// defect (docs/model.md §2.9).
     pub ball_diameter: f64,
+    /// Contact angle `φ` (rad): enters the characteristic frequencies only
+    /// (docs/model.md §7.3); the planar model simulates `φ = 0`, and a study refuses
+    /// another value for a simulated case.
+    pub contact_angle: f64,
 }
 
 impl Default for BearingParams {
@@ -148,6 +152,7 @@ impl Default for BearingParams {
             outer_waviness: RaceWaviness::default(),
             defects: Vec::new(),
             ball_diameter: 8.70e-3,
+            contact_angle: 0.0,
         }
     }
 }

@@ -36,6 +36,17 @@ pub(super) fn accuracy_command(
         .exit();
     }
     let study = load(grid, &limits)?;
+    if study.recordings.is_some() {
+        return Err(StudyError {
+            path: grid.to_path_buf(),
+            location: None,
+            field: "recordings".into(),
+            message: "a study of measured recordings has nothing to integrate: `accuracy` \
+                      measures integrators on simulated cases"
+                .into(),
+        }
+        .into());
+    }
     check_memory(grid, &study, &limits)?;
     let output = output.unwrap_or_else(|| PathBuf::from(format!("{}_accuracy.h5", study.name)));
     // The output first, before all the work: nothing there that is not ours, no

@@ -457,11 +457,6 @@ impl Layout {
     pub fn validate(&self) -> Result<(), String> {
         let n_case = self.case_ids.len();
         let n_ref = self.reference_ids.len();
-        if n_ref == 0 && n_case > 0 {
-            return Err(format!(
-                "`{REFERENCE}` needs at least one reference id for the cases to refer to"
-            ));
-        }
         distinct(CASE, &self.case_ids)?;
         distinct(REFERENCE, &self.reference_ids)?;
         distinct(REPLICATE, &self.replicates)?;
@@ -508,9 +503,11 @@ impl Layout {
                 ));
             }
         }
-        if self.reference_index.len() != n_case {
+        // Without references (measured recordings) the cases refer to none.
+        let refer = if n_ref == 0 { 0 } else { n_case };
+        if self.reference_index.len() != refer {
             return Err(format!(
-                "`{REFERENCE_INDEX}` has {} values for {n_case} cases",
+                "`{REFERENCE_INDEX}` has {} values for {n_case} cases and {n_ref} references",
                 self.reference_index.len()
             ));
         }

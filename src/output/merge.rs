@@ -408,8 +408,10 @@ fn merged_layout(
         };
         param.values = gathered(refs, &param.values, at);
     }
+    // Cases without references (measured recordings) refer to none.
     layout.reference_index = order
         .iter()
+        .filter(|_| !refs.is_empty())
         .map(|&(_, s, row)| {
             let l = readers[s].layout();
             let id = l.reference_ids[l.reference_index[row] as usize];

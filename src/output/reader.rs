@@ -527,7 +527,11 @@ fn coordinates(file: &File, path: &Path) -> Result<Layout, StudyFileError> {
         parameters: Vec::new(),
         reference_parameters: Vec::new(),
         reference_series: Vec::new(),
-        reference_index: read_ids(file, REFERENCE_INDEX, path)?,
+        // A file without references (measured recordings) has no `reference_index`.
+        reference_index: match file.dataset(REFERENCE_INDEX) {
+            Ok(_) => read_ids(file, REFERENCE_INDEX, path)?,
+            Err(_) => Vec::new(),
+        },
         attributes: Vec::new(),
         storage: Storage::default(),
     })

@@ -23,15 +23,19 @@ pub struct Measured {
     pub stored_bytes: u64,
 }
 
-/// Runs case row `row` of `study` whole, with its reference, as a worker would, and
+/// Runs case row `row` of `study` whole, with its reference (a simulated case's), as a worker would, and
 /// measures it; the error says why the case (or its reference) failed.
 pub fn measure_case(study: &Study, row: usize) -> Result<Measured, String> {
     let case = &study.cases[row];
     let start = thread_cpu();
-    let reference = run_reference(study, case.reference).map_err(|e| e.to_string())?;
+    // A measured recording has no reference.
+    let reference = match study.recordings {
+        Some(_) => None,
+        None => Some(run_reference(study, case.reference).map_err(|e| e.to_string())?),
+    };
     let after_reference = thread_cpu();
     let mut analyses = Analyses::new(study).map_err(|e| format!("the analysed window: {e}"))?;
-    let result = analyses.run(study, row, case, &reference);
+    let result = analyses.run(study, row, case, reference.as_ref());
     if result.status == Status::Failed {
         return Err(result.message);
     }

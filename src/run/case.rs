@@ -11,6 +11,8 @@ use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
 use crate::study::study_metric_specs;
 use crate::study::{Case, Replicates, Study};
 
+use super::recording::run_recording;
+
 /// What one case contributes to the file, owned so it can cross threads.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct CaseResult {
@@ -73,23 +75,21 @@ impl Analyses {
         })
     }
 
-    /// [`run_case`] with these plans.
+    /// [`run_case`] with these plans against the simulated case's `reference`, or,
+    /// without one, [`run_recording`] (a recordings study's case).
     pub(crate) fn run(
         &mut self,
         study: &Study,
         row: usize,
         case: &Case,
-        reference: &CaseOutput,
+        reference: Option<&CaseOutput>,
     ) -> CaseResult {
-        run_case(
-            study,
-            row,
-            case,
-            reference,
-            &mut self.plan,
-            self.envelope.as_mut(),
-            self.orders.as_mut(),
-        )
+        let (plan, envelope, orders) =
+            (&mut self.plan, self.envelope.as_mut(), self.orders.as_mut());
+        match reference {
+            Some(reference) => run_case(study, row, case, reference, plan, envelope, orders),
+            None => run_recording(study, row, case, plan, envelope, orders),
+        }
     }
 }
 
@@ -135,7 +135,7 @@ fn run_case(
         params,
         &out,
         &sensor_series,
-        reference,
+        Some(reference),
         study.analysis_window(),
         &study.spectrum_channels,
         plan,
@@ -185,14 +185,14 @@ fn run_case(
 /// Cuts the spectra over `frequency` to the bins the file keeps
 /// (`spectra.max_frequency`, [`Study::stored_bins`]); the spectral kurtoses after them,
 /// on their own frequencies, stay whole. The metrics were computed from every bin.
-fn keep_stored_bins(study: &Study, spectra: &mut [Vec<f64>]) {
+pub(super) fn keep_stored_bins(study: &Study, spectra: &mut [Vec<f64>]) {
     for s in spectra.iter_mut().take(study.stored_spectra_count()) {
         s.truncate(study.stored_bins());
     }
 }
 
 /// The number of metric values of a case record ([`CaseResult::metrics`]).
-fn metric_values(study: &Study) -> usize {
+pub(super) fn metric_values(study: &Study) -> usize {
     study_metric_specs(study).len()
         + study.replicates.map_or(0, |r| r.count) * replicated_metrics().len()
         + study.revolutions * revolution_metric_specs().len()
@@ -201,7 +201,7 @@ fn metric_values(study: &Study) -> usize {
 
 /// The record of case row `row` failed with `message`: no series, its metrics NaN but
 /// the wall time since `start`.
-fn failed(
+pub(super) fn failed(
     study: &Study,
     row: usize,
     message: String,
@@ -209,7 +209,8 @@ fn failed(
     start: std::time::Instant,
 ) -> CaseResult {
     let mut metrics = vec![f64::NAN; metric_values(study)];
-    metrics[metric_specs(study.envelope.as_ref()).len() - 1] = start.elapsed().as_secs_f64();
+    metrics[metric_specs(study.envelope.as_ref(), study.recordings.is_none()).len() - 1] =
+        start.elapsed().as_secs_f64();
     CaseResult {
         row,
         status: Status::Failed,
@@ -345,7 +346,7 @@ fn run_replicates(
             &case.params,
             &out,
             &[],
-            reference,
+            Some(reference),
             study.analysis_window(),
             &[],
             plan,

@@ -18,6 +18,7 @@ mod error;
 mod journal;
 mod order;
 mod progress;
+mod recording;
 mod references;
 mod stats;
 
@@ -532,11 +533,13 @@ fn run_pending(
                 let mut encoder = ChunkEncoder::new(work.storage);
                 while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let case = &work.study.cases[work.rows[row]];
-                    let reference = work
-                        .references
-                        .get(case.reference)
-                        .expect("every reference ran when the file was created");
-                    let result = analyses.run(work.study, row, case, &reference);
+                    // A measured recording has no reference.
+                    let reference = work.study.recordings.is_none().then(|| {
+                        work.references
+                            .get(case.reference)
+                            .expect("every reference ran when the file was created")
+                    });
+                    let result = analyses.run(work.study, row, case, reference.as_deref());
                     let cpu = thread_cpu();
                     let record = Box::new(JournalRecord::encode(&result, &mut encoder));
                     tally.case(

@@ -62,8 +62,9 @@ pub fn admissible(band: Band, usable: f64, lines: &[f64]) -> bool {
 }
 
 /// The prominence of the candidate `lines` (Hz) in a band's squared-envelope spectrum,
-/// given as `lags`, the spectrum's unwindowed DFT bins `R_d` (`d = 0..bins`, spacing
-/// `df` Hz; `R_d = Σ_b Z_{b+d} Z*_b` over the band's analytic bins, docs/model.md §7.6).
+/// given as `lags`, the spectrum's unwindowed DFT bins `R_d` (`d = 0..bins` for a band
+/// of `bins` analytic bins, of which the first [`lags_needed`] are read; spacing `df`
+/// Hz; `R_d = Σ_b Z_{b+d} Z*_b` over the band's analytic bins, docs/model.md §7.6).
 /// The bins are Hann-windowed in frequency, `H_d = R_d/2 − (R_{d−1} + R_{d+1})/4`, as
 /// the envelope spectrum of §7.4 is. For a line `f` the prominence is the mean of
 /// `|H_d|²` over the windows `|d df − h f| ≤ max(0.02 h f, 1.5 df)` of its harmonics
@@ -72,15 +73,9 @@ pub fn admissible(band: Band, usable: f64, lines: &[f64]) -> bool {
 /// periodic train of impacts raises its lines above the envelope spectrum's floor,
 /// noise and single spikes raise the floor itself. Returns the largest prominence over
 /// the lines (dimensionless, about 1 with no line), NaN when no line's windows fit.
-pub fn line_prominence(lags: &[Complex<f64>], df: f64, lines: &[f64]) -> f64 {
-    let bins = lags.len();
+pub fn line_prominence(lags: &[Complex<f64>], bins: usize, df: f64, lines: &[f64]) -> f64 {
     let hann = |d: usize| (0.5 * lags[d] - 0.25 * (lags[d - 1] + lags[d + 1])).norm_sqr();
-    let widest = lines
-        .iter()
-        .copied()
-        .filter(|f| f.is_finite())
-        .fold(0.0, f64::max);
-    let top = (((HARMONICS as f64 + 0.5) * widest / df) as usize).min(bins.saturating_sub(2));
+    let top = top_lag(bins, df, lines);
     if top < 3 {
         return f64::NAN;
     }
@@ -105,6 +100,29 @@ pub fn line_prominence(lags: &[Complex<f64>], df: f64, lines: &[f64]) -> f64 {
         }
     }
     best
+}
+
+/// How many of a band's `bins` lags `R_0, R_1, …` (spacing `df` Hz)
+/// [`line_prominence`] reads for the candidate `lines` (Hz): those up to one past the
+/// floor's range and the highest harmonic window, at most `bins`.
+pub fn lags_needed(bins: usize, df: f64, lines: &[f64]) -> usize {
+    let windows = lines.iter().filter(|f| f.is_finite()).map(|&f| {
+        let centre = HARMONICS as f64 * f;
+        let half = (BAND_HALF_WIDTH_RELATIVE * centre).max(BAND_HALF_WIDTH_BINS * df);
+        ((centre + half) / df).floor() as usize
+    });
+    (windows.fold(top_lag(bins, df, lines), usize::max) + 2).min(bins)
+}
+
+/// The highest lag of the median floor of [`line_prominence`]:
+/// `(HARMONICS + 0.5) f_max / df`, at most `bins − 2`.
+fn top_lag(bins: usize, df: f64, lines: &[f64]) -> usize {
+    let widest = lines
+        .iter()
+        .copied()
+        .filter(|f| f.is_finite())
+        .fold(0.0, f64::max);
+    (((HARMONICS as f64 + 0.5) * widest / df) as usize).min(bins.saturating_sub(2))
 }
 
 /// The median of `values` (reordered; NaN when empty).

@@ -1,5 +1,6 @@
 //! The series a study's spectra, envelope and order analysis read: a simulated
-//! channel ([`CHANNELS`]) or a sensor's series (docs/model.md §7.8).
+//! channel ([`CHANNELS`]), a sensor's series (docs/model.md §7.8) or a measured
+//! recording's (docs/model.md §7.10).
 
 use crate::simulate::{CaseOutput, CHANNELS};
 
@@ -11,6 +12,8 @@ pub enum Source {
     /// The sensor series at this index of a case's sensor series: sensor `k`'s noisy
     /// series `<name>` at `2k`, its noise-free `<name>_clean` at `2k + 1`.
     Sensor(usize),
+    /// A recordings study's measured series: the case's only other series.
+    Recording,
 }
 
 /// One series a study analyses, with what its derived variables are named after.
@@ -39,12 +42,25 @@ impl AnalysisChannel {
         })
     }
 
-    /// Its samples in a case: `out`'s channel or one of `sensors` (the case's sensor
-    /// series, [`Source::Sensor`] order).
-    pub fn samples<'a>(&self, out: &'a CaseOutput, sensors: &'a [Vec<f64>]) -> &'a [f64] {
+    /// Its samples in a case: `out`'s channel or one of `series`, the case's series
+    /// that are not simulated (its sensor series in [`Source::Sensor`] order, or a
+    /// recording's one measured series).
+    pub fn samples<'a>(&self, out: &'a CaseOutput, series: &'a [Vec<f64>]) -> &'a [f64] {
         match self.source {
             Source::Simulated(c) => &out.channels[c],
-            Source::Sensor(k) => &sensors[k],
+            Source::Sensor(k) => &series[k],
+            Source::Recording => &series[0],
+        }
+    }
+
+    /// The measured series `name` of a recordings study, in the recording's own
+    /// units (CF `1`: a file does not say what it measured in).
+    pub fn recording(name: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            units: "1",
+            long_name: format!("measured recording {name}"),
+            source: Source::Recording,
         }
     }
 }

@@ -26,7 +26,9 @@ impl FaultFrequencies {
     /// `ω̄_i = ω`, `ω̄_o = 0` at crank_ground and `ω̄_i = 0` (the rod's mean),
     /// `ω̄_o = ω` at crank_rod, `ω = 2π rpm/60`; the cage turns at
     /// `ω̄_m = (ω̄_i d_i + ω̄_o d_o)/(d_i + d_o)`; `D = (d_o − d_i)/2` and
-    /// `d_m = (d_i + d_o)/2`. A varying crank speed gives NaN: its lines move with
+    /// `d_m = (d_i + d_o)/2`; with a contact angle `φ`, `γ = (D/d_m) cos φ` and
+    /// `ω̄_m = (ω̄_i (1 − γ) + ω̄_o (1 + γ))/2` (at `φ = 0` the form above), the ball
+    /// spin `(d_m/2D)(1 − γ²) |ω̄_i − ω̄_o|/2π`. A varying crank speed gives NaN: its lines move with
     /// the speed (a profile that stays at one speed counts as that speed).
     pub fn of(params: &CaseParams) -> Self {
         Self::at_rpm(params, params.constant_rpm().unwrap_or(f64::NAN))
@@ -57,15 +59,17 @@ impl FaultFrequencies {
         };
         let b = &params.bearing;
         let (di, d_o) = (b.inner_race_diameter, b.outer_race_diameter);
-        let wm = (wi * di + wo * d_o) / (di + d_o);
-        let nb = b.ball_count as f64;
         let ratio = (d_o - di) / (d_o + di);
+        // γ = (D/d_m) cos φ: the contact points' radii are d_m(1 ∓ γ)/2.
+        let gamma = ratio * b.contact_angle.cos();
+        let wm = 0.5 * (wi * (1.0 - gamma) + wo * (1.0 + gamma));
+        let nb = b.ball_count as f64;
         let hz = 1.0 / std::f64::consts::TAU;
         Self {
             ftf: wm.abs() * hz,
             bpfo: nb * (wm - wo).abs() * hz,
             bpfi: nb * (wi - wm).abs() * hz,
-            bsf: (1.0 - ratio * ratio) / (2.0 * ratio) * (wi - wo).abs() * hz,
+            bsf: (1.0 - gamma * gamma) / (2.0 * ratio) * (wi - wo).abs() * hz,
         }
     }
 

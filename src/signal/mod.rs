@@ -9,6 +9,7 @@ pub mod channel;
 pub mod envelope;
 pub mod fault_frequencies;
 pub mod indicators;
+mod lag_table;
 pub mod metrics;
 pub mod order;
 pub mod replicates;
@@ -37,10 +38,30 @@ const DEVIATION_CHANNELS: [(&str, &str); 3] = [
     ("bearing_force", "N"),
 ];
 
-/// The per-case metric variables, in file order: those of every study, then, for a
-/// study with `envelope:` ([`envelope_metric_specs`]), the envelope metrics, then
-/// `wall_time` (always last).
-pub fn metric_specs(envelope: Option<&EnvelopeSettings>) -> Vec<VarSpec> {
+/// The per-case metric variables, in file order: those of every `simulated` study
+/// ([`simulation_metric_specs`]; none for a study of measured recordings), then,
+/// for a study with `envelope:` ([`envelope_metric_specs`]), the envelope metrics,
+/// then `wall_time` (always last).
+pub fn metric_specs(envelope: Option<&EnvelopeSettings>, simulated: bool) -> Vec<VarSpec> {
+    let mut specs = if simulated {
+        simulation_metric_specs()
+    } else {
+        Vec::new()
+    };
+    if let Some(settings) = envelope {
+        specs.extend(envelope_metric_specs(settings));
+    }
+    specs.extend([VarSpec::new(
+        "wall_time",
+        "s",
+        "wall-clock time of the case (integration or reading, sampling, spectra)",
+    )]);
+    specs
+}
+
+/// The metrics of a simulated case ([`case_metrics`]): its deviations from the ideal
+/// mechanism, bearing force and loaded balls, and the integrator's work.
+fn simulation_metric_specs() -> Vec<VarSpec> {
     let mut specs = Vec::new();
     for (ch, units) in DEVIATION_CHANNELS {
         specs.push(VarSpec::new(
@@ -94,14 +115,6 @@ pub fn metric_specs(envelope: Option<&EnvelopeSettings>) -> Vec<VarSpec> {
             "time from which contacts were held through chattering switches by the tolerance's band (NaN: never)",
         ),
     ]);
-    if let Some(settings) = envelope {
-        specs.extend(envelope_metric_specs(settings));
-    }
-    specs.extend([VarSpec::new(
-        "wall_time",
-        "s",
-        "wall-clock time of the case (integration, sampling, spectra)",
-    )]);
     specs
 }
 
@@ -443,17 +456,19 @@ fn case_metrics(out: &CaseOutput, reference: &CaseOutput, window: Range<usize>) 
     metrics
 }
 
-/// The spectra of `spectrum_channels` (in `out` or `sensors`, the case's sensor
-/// series) and the metrics of `out` (the case `params`) against `reference` (the
-/// ideal mechanism at the same speed and sample times), over the analysed `window`
-/// of samples; with `envelope`, also its spectra (after the others) and metrics
-/// (before `wall_time`); with `orders`, the order spectra.
+/// The spectra of `spectrum_channels` (in `out` or `sensors`, the case's series that
+/// are not simulated: sensor series or a recording's) and, for a simulated case, the
+/// metrics of `out` (the case `params`) against `reference` (the ideal mechanism at
+/// the same speed and sample times; none for a measured recording, which has no
+/// such metrics), over the analysed `window` of samples; with `envelope`, also its
+/// spectra (after the others) and metrics (before `wall_time`); with `orders`, the
+/// order spectra.
 #[allow(clippy::too_many_arguments)]
 pub fn analyse(
     params: &CaseParams,
     out: &CaseOutput,
     sensors: &[Vec<f64>],
-    reference: &CaseOutput,
+    reference: Option<&CaseOutput>,
     window: Range<usize>,
     spectrum_channels: &[AnalysisChannel],
     plan: &mut SpectrumPlan,
@@ -467,7 +482,7 @@ pub fn analyse(
         plan.amplitude(&series[window.clone()], &mut amp)?;
         spectra.push(amp);
     }
-    let mut metrics = case_metrics(out, reference, window.clone());
+    let mut metrics = reference.map_or(Vec::new(), |r| case_metrics(out, r, window.clone()));
     let mut squared = Vec::new();
     let wants_squared = orders.as_ref().is_some_and(|o| o.settings.envelope);
     if let Some(envelope) = envelope {

@@ -13,7 +13,7 @@ pub const HORIZON_THRESHOLD: f64 = 1e-3;
 /// ideal mechanism's own `*_reference_rms` (the same for every replicate) and
 /// `wall_time` (of the whole case).
 pub fn replicated_metrics() -> Vec<usize> {
-    metric_specs(None)
+    metric_specs(None, true)
         .iter()
         .enumerate()
         .filter(|(_, s)| !s.name.ends_with("_reference_rms") && s.name != "wall_time")
@@ -24,7 +24,7 @@ pub fn replicated_metrics() -> Vec<usize> {
 /// The `[case, replicate]` variables: `<metric>_replicates` per
 /// [`replicated_metrics`] entry.
 pub fn replicate_metric_specs() -> Vec<VarSpec> {
-    let specs = metric_specs(None);
+    let specs = metric_specs(None, true);
     replicated_metrics()
         .into_iter()
         .map(|k| {
@@ -44,7 +44,7 @@ pub fn replicate_metric_specs() -> Vec<VarSpec> {
 /// The `[case]` statistics over the replicates, per [`replicated_metrics`] entry:
 /// `<metric>_mean`, `<metric>_std` and `<metric>_ci95` (see [`Summary`]).
 pub fn summary_specs() -> Vec<VarSpec> {
-    let specs = metric_specs(None);
+    let specs = metric_specs(None, true);
     replicated_metrics()
         .into_iter()
         .flat_map(|k| {

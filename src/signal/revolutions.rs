@@ -66,7 +66,7 @@ fn per_revolution(name: &str) -> bool {
 /// The `[case, revolution]` variables: `<metric>_per_revolution` for the RMS and
 /// peak deviation of each deviation channel, in [`metric_specs`] order.
 pub fn revolution_metric_specs() -> Vec<VarSpec> {
-    metric_specs(None)
+    metric_specs(None, true)
         .into_iter()
         .filter(|s| per_revolution(&s.name))
         .map(|s| {

@@ -44,10 +44,12 @@ pub struct GridFile {
     /// Free text.
     #[serde(default)]
     pub description: Option<String>,
-    /// Simulated time per case (s).
-    pub duration: S<Scalar>,
-    /// Output samples per second (Hz).
-    pub sample_rate: S<Scalar>,
+    /// Simulated time per case (s); required unless the study lists `recordings:`.
+    #[serde(default)]
+    pub duration: Option<S<Scalar>>,
+    /// Output samples per second (Hz); required unless the study lists `recordings:`.
+    #[serde(default)]
+    pub sample_rate: Option<S<Scalar>>,
     /// Effects simulated: any of clearance, waviness, damping, gravity, defects,
     /// housing.
     #[serde(default)]
@@ -117,6 +119,42 @@ pub struct GridFile {
     /// with two or more replicates).
     #[serde(default)]
     pub chaos_check: Option<S<bool>>,
+    /// Measured recordings analysed instead of simulated cases, one case each.
+    #[serde(default)]
+    pub recordings: Option<S<Vec<S<RecordingSection>>>>,
+    /// A recordings study's analysed length (s); default: the shortest recording's.
+    #[serde(default)]
+    pub window: Option<S<Scalar>>,
+    /// The name of a recordings study's measured series (default `vibration`).
+    #[serde(default)]
+    pub series: Option<S<String>>,
+}
+
+/// One entry of `recordings:`: a file, where its samples are, and the case it is.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingSection {
+    /// The file (a path relative to the grid file's directory, or absolute).
+    pub file: S<String>,
+    /// The `.npz` member, HDF5 / netCDF dataset or MAT variable (or struct field path).
+    #[serde(default)]
+    pub variable: Option<S<String>>,
+    /// The WAV channel, 0-based.
+    #[serde(default)]
+    pub channel_index: Option<S<u64>>,
+    /// The CSV column: a header name or a 0-based index.
+    #[serde(default)]
+    pub column: Option<S<Scalar>>,
+    /// Samples per second (Hz).
+    pub sample_rate: S<Scalar>,
+    /// The shaft speed (rev/min), inner race turning, outer race fixed.
+    #[serde(default)]
+    pub rpm: Option<S<Scalar>>,
+    /// A varying shaft speed, instead of `rpm`.
+    #[serde(default)]
+    pub speed: Option<S<SpeedSection>>,
+    /// The fault label: `none`, `outer`, `inner`, `ball`, or several joined by `+`.
+    pub fault: S<String>,
 }
 
 /// `replicates:`: how many runs per case and how far apart they start.
@@ -334,6 +372,9 @@ pub struct HarmonicSection {
 pub struct GeometrySection {
     pub ball_diameter: Option<S<Scalar>>,
     pub pitch_diameter: Option<S<Scalar>>,
+    /// Contact angle (rad; default 0): a recordings study's characteristic
+    /// frequencies only; a simulated case's planar model refuses a nonzero one.
+    pub contact_angle: Option<S<Scalar>>,
     pub inner_conformity: Option<S<Scalar>>,
     pub outer_conformity: Option<S<Scalar>>,
     pub youngs_modulus: Option<S<Scalar>>,

@@ -7,7 +7,8 @@ use serde_saphyr::Location;
 
 use super::config::{
     BandValue, BearingSection, CaseValue, DefectSection, EnvelopeSection, GridFile, OutputSection,
-    Scalar, SensorSection, SeriesValue, SpectraSection, SpeedSection, WavinessSection, S,
+    RecordingSection, Scalar, SensorSection, SeriesValue, SpectraSection, SpeedSection,
+    WavinessSection, S,
 };
 use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
@@ -23,6 +24,7 @@ mod design;
 mod effects;
 mod journal;
 mod memory_check;
+mod recordings;
 mod references;
 mod replicates;
 mod sensors;
@@ -66,20 +68,33 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     let ctx = Ctx { path };
     let file = parse(&ctx, text)?;
     check_name(&ctx, &file.name)?;
-    let sampling = sampling_of(&ctx, &file)?;
-    let effects = effects(&ctx, &file)?;
+    match file.recordings {
+        Some(_) => recordings::build_recordings(&ctx, file, text, limits),
+        None => build_simulated(&ctx, file, text, limits),
+    }
+}
+
+/// [`build`] for a study of simulated cases, its grid `file` parsed from `text`.
+fn build_simulated(
+    ctx: &Ctx<'_>,
+    file: GridFile,
+    text: &str,
+    limits: &Limits,
+) -> Result<Study, StudyError> {
+    let sampling = sampling_of(ctx, &file)?;
+    let effects = effects(ctx, &file)?;
     let mut prov = Provenance::new();
-    let base = base_case(&ctx, &file, &effects, &mut prov)?;
-    let solver = solver(&ctx, &file, &sampling)?;
-    let (groups, axes_names) = axis_groups(&ctx, &file)?;
-    let rows = design::rows(&ctx, &file)?;
-    let (total, count) = case_count(&ctx, &file, &groups, rows)?;
+    let base = base_case(ctx, &file, &effects, &mut prov)?;
+    let solver = solver(ctx, &file, &sampling)?;
+    let (groups, axes_names) = axis_groups(ctx, &file)?;
+    let rows = design::rows(ctx, &file)?;
+    let (total, count) = case_count(ctx, &file, &groups, rows)?;
     // Before the design is drawn: its values are rows × parameters.
     let places = memory_check::Places::of(&file);
     let mut known = known_before_expansion(&file, &sampling, total, rows);
-    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
+    memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let (mut cases, design) = expand_cases(
-        &ctx,
+        ctx,
         &file,
         (&base, &prov),
         &effects,
@@ -88,33 +103,31 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
     )?;
     check_joint_keys(&ctx, &file, &cases)?;
     let references = assign_references(&mut cases);
-    let transient = transient_of(&ctx, &file, &sampling, &cases)?;
+    let transient = transient_of(ctx, &file, &sampling, &cases)?;
     let sensors = match &file.sensors {
-        Some(list) => sensors::sensors(&ctx, list, &sampling, &effects)?,
+        Some(list) => sensors::sensors(ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
-    sensors::check_realizations(&ctx, &sensors, &cases)?;
-    let analysed = (&sensors[..], &effects);
-    let (window, spectrum_channels) = spectra_settings(&ctx, file.spectra.as_ref(), analysed)?;
-    let max_frequency = analysis::max_frequency(&ctx, file.spectra.as_ref(), &sampling)?;
+    sensors::check_realizations(ctx, &sensors, &cases)?;
+    let analysed = Analysed::Simulated(&sensors[..], &effects);
+    let (window, spectrum_channels) = spectra_settings(ctx, file.spectra.as_ref(), analysed)?;
+    let max_frequency = analysis::max_frequency(ctx, file.spectra.as_ref(), &sampling)?;
     let envelope = file
         .envelope
         .as_ref()
-        .map(|e| envelope_settings(&ctx, e, &sampling, transient, analysed))
+        .map(|e| envelope_settings(ctx, e, &sampling, transient, analysed))
         .transpose()?;
-    let orders = order_settings(&ctx, &file, &sampling, transient, &cases)?;
-    let (float32, compression) = output_settings(&ctx, file.output.as_ref())?;
-    let (replicates, chaos_check) = replicates::resolve(&ctx, &file, &cases)?;
+    let (float32, compression) = output_settings(ctx, file.output.as_ref())?;
+    let (replicates, chaos_check) = replicates::resolve(ctx, &file, &cases)?;
     let revolutions = most_revolutions(&cases, transient, sampling.duration);
-    check_samples_per_revolution(&ctx, &file, revolutions, &sampling)?;
-    known.references = references.len() as u64;
-    known.revolutions = revolutions as u64;
-    memory_check::check_lower_bound(&ctx, &places, &known, limits)?;
+    check_samples_per_revolution(ctx, &file, revolutions, &sampling)?;
+    (known.references, known.revolutions) = (references.len() as u64, revolutions as u64);
+    memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let mut study = Study {
-        name: file.name.value,
-        description: file.description.unwrap_or_default(),
+        name: file.name.value.clone(),
+        description: file.description.clone().unwrap_or_default(),
         source: text.to_string(),
-        path: path.to_path_buf(),
+        path: ctx.path.to_path_buf(),
         sampling,
         solver,
         effects,
@@ -123,7 +136,7 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         spectrum_channels,
         max_frequency,
         envelope,
-        orders,
+        orders: order_settings(ctx, &file, &sampling, transient, &cases)?,
         float32,
         compression,
         axes: axes_names,
@@ -135,11 +148,30 @@ pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, S
         revolutions,
         sensors: Vec::new(),
         output: SeriesOutput::default(),
+        recordings: None,
     };
     let (list, output) = (file.sensors.as_ref(), file.output.as_ref());
-    add_outputs(&ctx, list, output, &mut study, sensors)?;
-    memory_check::check_study(&ctx, &places, &study, limits)?;
+    add_outputs(ctx, list, output, &mut study, sensors)?;
+    memory_check::check_study(ctx, &places, &study, limits)?;
     Ok(study)
+}
+
+/// Refuses the keys of a `recordings:` study (`window`, `series`) in a study of
+/// simulated cases.
+fn refuse_recording_keys(ctx: &Ctx<'_>, file: &GridFile) -> Result<(), StudyError> {
+    let given = [
+        ("window", file.window.as_ref().map(|w| at(&w.referenced))),
+        ("series", file.series.as_ref().map(|s| at(&s.referenced))),
+    ];
+    match given.into_iter().find(|(_, place)| place.is_some()) {
+        Some((key, place)) => Err(ctx.err(
+            place,
+            key,
+            "only a study with `recordings:` takes it; a simulated study's analysed \
+             window is `transient` to `duration`",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The most whole revolutions of any of `cases` between `transient` and `duration` (s).
@@ -244,7 +276,7 @@ fn check_samples_per_revolution(
         return Ok(());
     }
     Err(ctx.err(
-        Some(at(&file.sample_rate.referenced)),
+        Some(memory_check::sample_rate_place(file)),
         "grid",
         format!(
             "a case turns the crank {revolutions} times after the transient but is sampled \

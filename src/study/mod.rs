@@ -24,6 +24,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::mechanism::{CaseParams, Location};
+use crate::recordings::read::Selector;
 use crate::signal::channel::AnalysisChannel;
 use crate::signal::envelope::EnvelopeSettings;
 use crate::signal::order::OrderSettings;
@@ -142,6 +143,34 @@ pub struct Study {
     /// The most whole crank revolutions any case has in the analysed window: the
     /// length of the file's `revolution` dimension (docs/model.md §6.1).
     pub revolutions: usize,
+    /// The measured recordings a `recordings:` study analyses, one per case; none
+    /// for a study of simulated cases.
+    pub recordings: Option<Recordings>,
+}
+
+/// A `recordings:` study's measured series (docs/grid-file.md, Recordings): what it
+/// is called and where each case's samples are.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recordings {
+    /// The series every recording becomes (`vibration`, or the grid's `series:`).
+    pub series: AnalysisChannel,
+    /// One per case, in case order.
+    pub list: Vec<Recording>,
+}
+
+/// One measured recording: one case of a `recordings:` study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    /// The file, resolved against the grid file's directory.
+    pub file: PathBuf,
+    /// The file as the grid file writes it (what the study file records).
+    pub written: String,
+    /// Where in the file the samples are.
+    pub selector: Selector,
+    /// How many samples the file holds (the case analyses the study's window of them).
+    pub samples: usize,
+    /// The fault label (`none`, `outer`, `inner`, `ball`, or several joined by `+`).
+    pub fault: String,
 }
 
 /// What a study file stores of each case's series (`output.series` and
@@ -277,9 +306,19 @@ impl Study {
     }
 
     /// The indices into [`CHANNELS`] of the channels the study simulates: those whose
-    /// `effect` is `None` or on in the study.
+    /// `effect` is `None` or on in the study; none in a study of recordings.
     pub fn simulated_channels(&self) -> Vec<usize> {
-        self.effects.channels()
+        match self.recordings {
+            Some(_) => Vec::new(),
+            None => self.effects.channels(),
+        }
+    }
+
+    /// Whether the file stores a recordings study's measured series.
+    pub fn stores_recording(&self) -> bool {
+        self.recordings
+            .as_ref()
+            .is_some_and(|r| self.output.stores(&r.series.name))
     }
 
     /// The sensor series the file stores, as indices into the list of every
@@ -294,9 +333,12 @@ impl Study {
             .collect()
     }
 
-    /// Number of series per case the file stores: channels and sensor series.
+    /// Number of series per case the file stores: channels, sensor series and a
+    /// recording's series.
     pub fn stored_series_count(&self) -> usize {
-        self.stored_channels().len() + self.stored_sensor_series().len()
+        self.stored_channels().len()
+            + self.stored_sensor_series().len()
+            + usize::from(self.stores_recording())
     }
 
     /// The sample indices the stored series keep: `0, k, 2k, …` below the

@@ -55,17 +55,19 @@ pub(super) const TIME_ATTRIBUTES: [(&str, &str); 4] = [
 ];
 
 impl Creator<'_> {
-    /// The `[case]` variables every file has: each case's reference row, its status
-    /// (a CF flag variable) and its error message.
+    /// The `[case]` variables every file has: each case's reference row (in a file
+    /// with references), its status (a CF flag variable) and its error message.
     fn case_variables(&self, case: &Dataset) -> Result<(), StudyFileError> {
         let l = self.layout;
-        let spec = VarSpec::new(
-            REFERENCE_INDEX,
-            "1",
-            "row of the reference run this case is compared with",
-        );
-        let ds = self.with_data(&spec.name, &ids32(&l.reference_index))?;
-        self.finish_var(&ds, &spec, None, &[case])?;
+        if !l.reference_ids.is_empty() {
+            let spec = VarSpec::new(
+                REFERENCE_INDEX,
+                "1",
+                "row of the reference run this case is compared with",
+            );
+            let ds = self.with_data(&spec.name, &ids32(&l.reference_index))?;
+            self.finish_var(&ds, &spec, None, &[case])?;
+        }
 
         let spec = VarSpec::new(STATUS, "1", "case status");
         let ds = self.empty::<i8>(STATUS, &[l.n_cases()], Status::Pending.code())?;

@@ -84,18 +84,36 @@ pub(super) fn order_settings(
     }))
 }
 
-/// `duration` and `sample_rate`, checked.
+/// `duration` and `sample_rate`, checked; both required, and `window` refused (a
+/// study without `recordings:`).
 pub(super) fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, StudyError> {
+    super::refuse_recording_keys(ctx, file)?;
+    let required = |v: &Option<S<Scalar>>, field: &str| {
+        v.clone().ok_or_else(|| {
+            ctx.err(
+                None,
+                field,
+                format!(
+                    "the required field `{field}` is missing (a study listing `recordings:` \
+                     takes it from them)"
+                ),
+            )
+        })
+    };
+    let (duration, sample_rate) = (
+        required(&file.duration, "duration")?,
+        required(&file.sample_rate, "sample_rate")?,
+    );
     let sampling = Sampling {
-        duration: ctx.quantity(&file.duration, Dimension::Time, "duration")?,
-        sample_rate: ctx.quantity(&file.sample_rate, Dimension::Frequency, "sample_rate")?,
+        duration: ctx.quantity(&duration, Dimension::Time, "duration")?,
+        sample_rate: ctx.quantity(&sample_rate, Dimension::Frequency, "sample_rate")?,
     };
     sampling.validate().map_err(|e| {
         ctx.err(
             Some(at(if e.field == "duration" {
-                &file.duration.referenced
+                &duration.referenced
             } else {
-                &file.sample_rate.referenced
+                &sample_rate.referenced
             })),
             &e.field,
             e.refusal(),
@@ -160,12 +178,22 @@ pub(super) fn transient_of(
     Ok(transient)
 }
 
+/// The series a study may analyse.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Analysed<'a> {
+    /// A simulated study's channels under its effects, and its sensors' series.
+    Simulated(&'a [Sensor], &'a Effects),
+    /// A recordings study's one measured series.
+    Recording(&'a AnalysisChannel),
+}
+
 /// The spectrum window's name and the channels with spectra (simulated channels or
-/// the series of `sensors`).
+/// the series of `sensors`; by default the slider acceleration, crank moment and
+/// bearing force, or a recordings study's series).
 pub(super) fn spectra_settings(
     ctx: &Ctx<'_>,
     spectra: Option<&SpectraSection>,
-    analysed: (&[Sensor], &Effects),
+    analysed: Analysed<'_>,
 ) -> Result<(String, Vec<AnalysisChannel>), StudyError> {
     let default = SpectraSection::default();
     let spectra = spectra.unwrap_or(&default);
@@ -184,10 +212,13 @@ pub(super) fn spectra_settings(
         }
     };
     let channels = match &spectra.channels {
-        None => ["slider_acceleration", "crank_moment", "bearing_force"]
-            .into_iter()
-            .map(|name| AnalysisChannel::simulated(name).expect("a channel"))
-            .collect(),
+        None => match analysed {
+            Analysed::Recording(r) => vec![r.clone()],
+            Analysed::Simulated(..) => ["slider_acceleration", "crank_moment", "bearing_force"]
+                .into_iter()
+                .map(|name| AnalysisChannel::simulated(name).expect("a channel"))
+                .collect(),
+        },
         Some(list) => list
             .value
             .iter()
@@ -236,13 +267,29 @@ pub(super) fn channel_named(
 }
 
 /// The series named by `c` (at `field`): a channel of [`CHANNELS`] the study's
-/// `effects` simulate or a series of `sensors` (`<name>` or `<name>_clean`).
+/// `effects` simulate or a series of `sensors` (`<name>` or `<name>_clean`); in a
+/// recordings study its measured series.
 pub(super) fn analysis_channel(
     ctx: &Ctx<'_>,
     c: &S<String>,
     field: &str,
-    (sensors, effects): (&[Sensor], &Effects),
+    analysed: Analysed<'_>,
 ) -> Result<AnalysisChannel, StudyError> {
+    let (sensors, effects) = match analysed {
+        Analysed::Simulated(sensors, effects) => (sensors, effects),
+        Analysed::Recording(r) if r.name == c.value => return Ok(r.clone()),
+        Analysed::Recording(r) => {
+            return Err(ctx.err(
+                Some(at(&c.referenced)),
+                field,
+                format!(
+                    "unknown series `{}`: a recordings study has one series, `{}` (the \
+                     grid's `series:` names it)",
+                    c.value, r.name
+                ),
+            ))
+        }
+    };
     if let Some(ch) = AnalysisChannel::simulated(&c.value) {
         channel_named(ctx, c, field, effects)?;
         return Ok(ch);
@@ -293,7 +340,7 @@ pub(super) fn envelope_settings(
     section: &S<EnvelopeSection>,
     sampling: &Sampling,
     transient: f64,
-    analysed: (&[Sensor], &Effects),
+    analysed: Analysed<'_>,
 ) -> Result<EnvelopeSettings, StudyError> {
     let list = &section.value.channels;
     if list.value.is_empty() {
@@ -479,6 +526,7 @@ pub(super) fn series_output(
                 .into_iter()
                 .map(|c| CHANNELS[c].name.to_string())
                 .chain(study.sensors.iter().flat_map(|s| s.specs()).map(|v| v.name))
+                .chain(study.recordings.iter().map(|r| r.series.name.clone()))
                 .collect();
             let mut names: Vec<String> = Vec::new();
             for (k, name) in list.iter().enumerate() {

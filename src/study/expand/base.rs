@@ -261,6 +261,21 @@ fn bearing_section(
         c.bearing.ball_diameter =
             ctx.quantity(d, Dimension::Length, "bearing.geometry.ball_diameter")?;
     }
+    if let Some(a) = b.geometry.as_ref().and_then(|g| g.contact_angle.as_ref()) {
+        let field = "bearing.geometry.contact_angle";
+        if ctx.quantity(a, Dimension::Angle, field)? != 0.0 {
+            return Err(ctx.err(
+                Some(at(&a.referenced)),
+                field,
+                format!(
+                    "{} is not allowed for a simulated case: its bearing model is planar \
+                     (contact angle 0); a nonzero contact angle is for the characteristic \
+                     frequencies of `recordings:`",
+                    a.value
+                ),
+            ));
+        }
+    }
     if let Some(list) = &b.defects {
         c.bearing.defects = defects(ctx, list, effects)?;
     }

@@ -22,6 +22,16 @@ pub struct Effects {
 }
 
 impl Effects {
+    /// Every effect off: a study that simulates nothing (measured recordings).
+    pub(super) const NONE: Effects = Effects {
+        clearance: false,
+        waviness: false,
+        damping: false,
+        gravity: false,
+        defects: false,
+        housing: false,
+    };
+
     pub(super) const NAMES: [&'static str; 6] = [
         "clearance",
         "waviness",
@@ -98,14 +108,7 @@ pub(super) fn effects(ctx: &Ctx<'_>, file: &GridFile) -> Result<Effects, StudyEr
             housing: false,
         });
     };
-    let mut e = Effects {
-        clearance: false,
-        waviness: false,
-        damping: false,
-        gravity: false,
-        defects: false,
-        housing: false,
-    };
+    let mut e = Effects::NONE;
     for (k, name) in list.value.iter().enumerate() {
         let slot = match name.value.as_str() {
             "clearance" => &mut e.clearance,

@@ -25,10 +25,25 @@ impl Places {
     /// The places in `file`.
     pub(super) fn of(file: &GridFile) -> Self {
         Self {
-            sample_rate: at(&file.sample_rate.referenced),
+            sample_rate: sample_rate_place(file),
             max_cases: file.max_cases.as_ref().map(|m| at(&m.referenced)),
         }
     }
+}
+
+/// Where the grid file sets the sample rate: `sample_rate`, or a recordings study's
+/// first recording's (line, column; 1:1 when neither is there, which the sampling's
+/// checks refuse first).
+pub(super) fn sample_rate_place(file: &GridFile) -> (u64, u64) {
+    let recorded = file
+        .recordings
+        .as_ref()
+        .and_then(|r| r.value.first())
+        .map(|r| &r.value.sample_rate);
+    file.sample_rate
+        .as_ref()
+        .or(recorded)
+        .map_or((1, 1), |v| at(&v.referenced))
 }
 
 /// What is known of a study before it is finished, for the lower-bound checks.

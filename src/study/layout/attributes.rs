@@ -48,7 +48,14 @@ fn study_attributes(
             shard.map_or(String::new(), |s| s.to_string()).into(),
         ),
         ("model_conventions".to_string(), MODEL_CONVENTIONS.into()),
-        ("solver".to_string(), study.solver.to_string().into()),
+        (
+            "solver".to_string(),
+            match study.recordings {
+                Some(_) => "none (measured recordings, nothing simulated)".to_string(),
+                None => study.solver.to_string(),
+            }
+            .into(),
+        ),
         ("duration".to_string(), study.sampling.duration.into()),
         ("sample_rate".to_string(), study.sampling.sample_rate.into()),
         ("transient".to_string(), study.transient.into()),

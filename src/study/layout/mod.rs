@@ -59,8 +59,10 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
     let cases: Vec<_> = rows.iter().map(|&r| &study.cases[r]).collect();
     let n_window = study.analysis_window().len();
     let parameters = parameters::case_parameters(study, &cases);
-    // The references this file's cases use, in index order: a shard holds only its own.
-    let mut reference_ids: Vec<u64> = cases.iter().map(|c| c.reference as u64).collect();
+    // The references this file's cases use, in index order: a shard holds only its own;
+    // measured recordings have none.
+    let simulated = cases.iter().filter(|_| study.recordings.is_none());
+    let mut reference_ids: Vec<u64> = simulated.clone().map(|c| c.reference as u64).collect();
     reference_ids.sort_unstable();
     reference_ids.dedup();
     let reference_parameters = parameters::reference_parameters(study, &reference_ids);
@@ -72,8 +74,7 @@ pub fn study_layout(study: &Study, rows: &[usize], shard: Option<Shard>) -> Layo
             .into_iter()
             .take(study.stored_bins())
             .collect(),
-        reference_index: cases
-            .iter()
+        reference_index: simulated
             .map(|c| reference_ids.partition_point(|&id| id < c.reference as u64) as u64)
             .collect(),
         reference_ids,

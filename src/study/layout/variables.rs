@@ -10,7 +10,7 @@ use crate::study::Study;
 /// The `[case]` metrics of a study's file: [`metric_specs`], then with replicates
 /// their [`summary_specs`], then with the chaos check its [`chaos_specs`].
 pub fn study_metric_specs(study: &Study) -> Vec<VarSpec> {
-    let mut specs = metric_specs(study.envelope.as_ref());
+    let mut specs = metric_specs(study.envelope.as_ref(), study.recordings.is_none());
     if study.replicates.is_some() {
         specs.extend(summary_specs());
     }
@@ -21,7 +21,8 @@ pub fn study_metric_specs(study: &Study) -> Vec<VarSpec> {
 }
 
 /// The `[case, time]` variables of a study's file: its stored channels
-/// ([`Study::stored_channels`]), then its stored sensor series.
+/// ([`Study::stored_channels`]), then its stored sensor series, then a recordings
+/// study's measured series ([`Study::stores_recording`]).
 pub(super) fn stored_series_specs(study: &Study) -> Vec<VarSpec> {
     let sensors: Vec<VarSpec> = study.sensors.iter().flat_map(|s| s.specs()).collect();
     let channels = study.stored_channels().into_iter().map(|k| {
@@ -32,7 +33,15 @@ pub(super) fn stored_series_specs(study: &Study) -> Vec<VarSpec> {
         .stored_sensor_series()
         .into_iter()
         .map(|k| sensors[k].clone());
-    channels.chain(sensors).collect()
+    let recording = study
+        .recordings
+        .iter()
+        .filter(|_| study.stores_recording())
+        .map(|r| {
+            let s = &r.series;
+            VarSpec::new(s.name.clone(), s.units, s.long_name.clone())
+        });
+    channels.chain(sensors).chain(recording).collect()
 }
 
 /// The reference series an ideal run may store: the channels an ideal mechanism has.

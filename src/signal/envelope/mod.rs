@@ -12,8 +12,9 @@ use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
-use super::band_choice::{admissible, line_prominence, usable_bandwidth};
+use super::band_choice::{admissible, lags_needed, line_prominence, usable_bandwidth};
 use super::channel::AnalysisChannel;
+use super::lag_table::LagTable;
 use super::spectrum::{frequencies, SpectrumError, SpectrumPlan, Window};
 
 /// A frequency band `low ≤ f ≤ high` (Hz), both edges included.
@@ -187,8 +188,11 @@ pub struct EnvelopePlan {
     real_scratch: Vec<Complex<f64>>,
     analytic: Vec<Complex<f64>>,
     complex_scratch: Vec<Complex<f64>>,
-    /// A band's bins, then their autocorrelation.
+    /// A band's bins, then their transform or autocorrelation.
     lags: Vec<Complex<f64>>,
+    /// The window's bins `Z_k / 2` and their lag table, for `band: auto`.
+    scaled: Vec<Complex<f64>>,
+    table: LagTable,
     squared: Vec<f64>,
 }
 
@@ -209,10 +213,17 @@ impl EnvelopePlan {
         let inverse = planner.plan_fft_inverse(n);
         let segment = stft_segment(n);
         let segment_forward = RealFftPlanner::<f64>::new().plan_fft_forward(segment);
+        let freqs = frequencies(n, sample_rate);
+        let bands = kurtogram_bands(sample_rate, kurtogram_depth(n));
+        let table = LagTable::new(
+            (bands.iter())
+                .filter_map(|&(_, band)| bins_of(&freqs, band))
+                .flat_map(|(k0, bins)| [k0, k0 + bins]),
+        );
         Ok(Self {
             sample_rate,
-            freqs: frequencies(n, sample_rate),
-            bands: kurtogram_bands(sample_rate, kurtogram_depth(n)),
+            freqs,
+            bands,
             segment_weights: Window::Hann.weights(segment),
             segment_real: segment_forward.make_input_vec(),
             segment_spectrum: segment_forward.make_output_vec(),
@@ -225,6 +236,8 @@ impl EnvelopePlan {
             analytic: vec![Complex::default(); n],
             complex_scratch: vec![Complex::default(); inverse.get_inplace_scratch_len()],
             lags: Vec::new(),
+            scaled: Vec::new(),
+            table,
             squared: vec![0.0; n],
             planner,
             forward,
@@ -260,7 +273,10 @@ impl EnvelopePlan {
         self.load(samples)?;
         let (band, band_kurtosis) = match choice {
             BandChoice::Fixed(band) => (band, self.band_kurtosis(band)),
-            BandChoice::Auto => self.choose_by_lines(lines),
+            BandChoice::Auto => {
+                let df = self.sample_rate / self.centred.len() as f64;
+                self.choose_by_lines(lines, lags_needed(usize::MAX, df, lines) <= LAG_TABLE_MAX)
+            }
             BandChoice::Kurtogram => {
                 let c = self.choose_band(|_| true);
                 (c.band, c.kurtosis)
@@ -324,71 +340,75 @@ impl EnvelopePlan {
     }
 
     /// `<|z|⁴>/<|z|²>² − 2` of the analytic signal in `band` (NaN when the band holds
-    /// no bin or no power), from the band's bins alone (docs/model.md §7.6): with the
-    /// `B` bins `Z_{k0+b}` and their autocorrelation `R_d` ([`EnvelopePlan::band_lags`]),
-    /// Parseval applied to `|z_j|²` gives
-    /// `Σ_j |z_j|⁴ / (Σ_j |z_j|²)² · n = (R_0² + 2 Σ_{d≥1} |R_d|²) / R_0²`, where a lag
-    /// `d = n/2` (the whole band of an even `n`) meets its mirror `−n/2` and counts
-    /// `(2 Re R_d)²` instead.
+    /// no bin or no power), from the band's bins alone (docs/model.md §7.6): the `B`
+    /// bins `Z_{k0+b}`, zero-padded to a length `L ≥ 2B − 1` ([`kurtosis_length`]),
+    /// transformed, `w_m = Σ_b Z_{k0+b} e^{−2πi mb/L}`, give the band's complex
+    /// envelope at `L` points of the window, shifted to baseband and without aliasing
+    /// of `|z|²` (whose DFT `R_d` spans lags `|d| ≤ B − 1`), so Parseval makes
+    /// `L Σ_m |w_m|⁴ / (Σ_m |w_m|²)² = n Σ_j |z_j|⁴ / (Σ_j |z_j|²)²`. The whole band of
+    /// an even `n`, `B = n/2 + 1`, takes `L = n`: there `w` is `z` itself.
     fn band_kurtosis(&mut self, band: Band) -> f64 {
-        match self.band_lags(band) {
-            Some(bins) => self.lag_kurtosis(bins),
-            None => f64::NAN,
-        }
-    }
-
-    /// The kurtosis of [`EnvelopePlan::band_kurtosis`] from the first `bins` lags
-    /// [`EnvelopePlan::band_lags`] left in `lags`.
-    fn lag_kurtosis(&self, bins: usize) -> f64 {
-        let n = self.centred.len();
-        let r0 = self.lags[0].re;
-        if r0.is_nan() || r0 <= 0.0 {
+        let Some((k0, bins)) = self.band_bins(band) else {
+            return f64::NAN;
+        };
+        let len = kurtosis_length(bins, self.centred.len());
+        self.load_bins(k0, bins, len);
+        let forward = self.planner.plan_fft_forward(len);
+        self.fit_scratch(forward.get_inplace_scratch_len());
+        forward.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
+        let (s2, s4) = self.lags.iter().fold((0.0, 0.0), |(s2, s4), w| {
+            let p = w.norm_sqr();
+            (s2 + p, s4 + p * p)
+        });
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::NAN;
         }
-        let mut sum = r0 * r0;
-        for (d, r) in self.lags[1..bins]
-            .iter()
-            .enumerate()
-            .map(|(d, r)| (d + 1, r))
-        {
-            sum += if 2 * d == n {
-                (2.0 * r.re).powi(2)
-            } else {
-                2.0 * r.norm_sqr()
-            };
-        }
-        sum / (r0 * r0) - 2.0
+        len as f64 * s4 / (s2 * s2) - 2.0
     }
 
-    /// Fills `lags` with the autocorrelation `R_d = Σ_b Z_{k0+b+d} Z*_{k0+b}`
-    /// (`d = 0..B`, times the padded length) of the `B` bins of `band`, by an FFT of
-    /// length `≥ 2B`, and returns `B` (`None` when the band holds no bin). `R_d` is
-    /// bin `d` of the DFT of `|z_j|²`, the squared envelope in the band (§7.6). The
-    /// common factor 2 of the `Z_k` is left out: the bins are taken as `Z_k / 2`, so
-    /// DC and Nyquist count half.
-    fn band_lags(&mut self, band: Band) -> Option<usize> {
-        let k0 = self.freqs.iter().position(|&f| band.contains(f))?;
-        let bins = self.freqs[k0..]
-            .iter()
-            .take_while(|&&f| band.contains(f))
-            .count();
-        let len = (2 * bins).next_power_of_two();
-        let forward = self.planner.plan_fft_forward(len);
-        let inverse = self.planner.plan_fft_inverse(len);
+    /// The first bin `k0` and the count `B` of the bins of `band` (`None` when it
+    /// holds none).
+    fn band_bins(&self, band: Band) -> Option<(usize, usize)> {
+        bins_of(&self.freqs, band)
+    }
+
+    /// Fills `lags` with the `bins` bins from `k0` taken as `Z_k / 2` (so DC and
+    /// Nyquist count half; the common factor 2 cancels in every ratio), zero-padded
+    /// to `len`.
+    fn load_bins(&mut self, k0: usize, bins: usize, len: usize) {
         let n = self.centred.len();
         self.lags.clear();
         self.lags
             .extend((k0..k0 + bins).map(|k| 0.5 * analytic_weight(k, n) * self.spectrum[k]));
         self.lags.resize(len, Complex::default());
-        let scratch = forward
-            .get_inplace_scratch_len()
-            .max(inverse.get_inplace_scratch_len());
-        if self.complex_scratch.len() < scratch {
-            self.complex_scratch.resize(scratch, Complex::default());
+    }
+
+    /// Grows the complex scratch to at least `len`.
+    fn fit_scratch(&mut self, len: usize) {
+        if self.complex_scratch.len() < len {
+            self.complex_scratch.resize(len, Complex::default());
         }
+    }
+
+    /// Fills `lags` with the autocorrelation `R_d = Σ_b Z_{k0+b+d} Z*_{k0+b}`,
+    /// `d = 0..B`, of the `B` bins of `band` (with [`EnvelopePlan::load_bins`]'
+    /// scaling) and returns `B` (`None` when the band holds no bin): an FFT of length
+    /// `≥ 2B − 1`, `|·|²` and the inverse FFT, divided by the length. `R_d` is bin `d`
+    /// of the DFT of `|z_j|²`, the squared envelope in the band (§7.6).
+    fn band_lags(&mut self, band: Band) -> Option<usize> {
+        let (k0, bins) = self.band_bins(band)?;
+        let len = kurtosis_length(bins, usize::MAX);
+        self.load_bins(k0, bins, len);
+        let forward = self.planner.plan_fft_forward(len);
+        let inverse = self.planner.plan_fft_inverse(len);
+        self.fit_scratch(
+            forward
+                .get_inplace_scratch_len()
+                .max(inverse.get_inplace_scratch_len()),
+        );
         forward.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
         for v in &mut self.lags {
-            *v = Complex::new(v.norm_sqr(), 0.0);
+            *v = Complex::new(v.norm_sqr() / len as f64, 0.0);
         }
         inverse.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
         Some(bins)
@@ -399,29 +419,59 @@ impl EnvelopePlan {
     /// of largest [`line_prominence`] (the first on a tie); the kurtogram's choice
     /// among the bands inside the usable bandwidth when no band has a finite
     /// prominence (no finite line, or lines too close to 0 Hz for the bins). Returns
-    /// the band and its complex-envelope kurtosis.
-    fn choose_by_lines(&mut self, lines: &[f64]) -> (Band, f64) {
+    /// the band and its complex-envelope kurtosis. The lags come from the window's
+    /// [`LagTable`] when `table`, else from each band's FFTs.
+    fn choose_by_lines(&mut self, lines: &[f64], table: bool) -> (Band, f64) {
         let usable = usable_bandwidth(&self.spectrum, 0.5 * self.sample_rate);
         let df = self.sample_rate / self.centred.len() as f64;
-        let (mut best, mut score, mut kurtosis) = (Band::NONE, f64::NAN, f64::NAN);
+        if table {
+            let n = self.centred.len();
+            self.scaled.clear();
+            self.scaled.extend(
+                (self.spectrum.iter().enumerate()).map(|(k, &y)| 0.5 * analytic_weight(k, n) * y),
+            );
+            self.table
+                .fill(&self.scaled, lags_needed(usize::MAX, df, lines));
+        }
+        let (mut best, mut score) = (Band::NONE, f64::NAN);
         for i in 0..self.bands.len() {
             let band = self.bands[i].1;
             if !admissible(band, usable, lines) {
                 continue;
             }
-            let Some(bins) = self.band_lags(band) else {
+            let Some(bins) = self.prominence_lags(band, table, |bins| lags_needed(bins, df, lines))
+            else {
                 continue;
             };
-            let prominence = line_prominence(&self.lags[..bins], df, lines);
+            let prominence = line_prominence(&self.lags, bins, df, lines);
             if prominence > score || (score.is_nan() && prominence.is_finite()) {
-                (best, score, kurtosis) = (band, prominence, self.lag_kurtosis(bins));
+                (best, score) = (band, prominence);
             }
         }
         if score.is_nan() {
             let c = self.choose_band(|band| band.high <= usable);
-            (best, kurtosis) = (c.band, c.kurtosis);
+            return (c.band, c.kurtosis);
         }
-        (best, kurtosis)
+        (best, self.band_kurtosis(best))
+    }
+
+    /// Fills `lags` with at least the first `count(B)` lags of `band`'s `B` bins, from
+    /// the filled [`LagTable`] when `table`, else by [`EnvelopePlan::band_lags`];
+    /// returns `B` (`None` when the band holds no bin).
+    fn prominence_lags(
+        &mut self,
+        band: Band,
+        table: bool,
+        count: impl Fn(usize) -> usize,
+    ) -> Option<usize> {
+        if !table {
+            return self.band_lags(band);
+        }
+        let (k0, bins) = self.band_bins(band)?;
+        self.lags.resize(count(bins), Complex::default());
+        self.table
+            .band_lags(&self.scaled, k0, k0 + bins, &mut self.lags);
+        Some(bins)
     }
 
     /// The kurtogram's choice for the loaded samples among the bands `allowed` admits.
@@ -540,245 +590,40 @@ fn analytic_weight(k: usize, n: usize) -> f64 {
     }
 }
 
-#[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-    use std::f64::consts::TAU;
-
-    /// Standard normal samples (Box–Muller on a 64-bit LCG), deterministic.
-    pub(crate) fn gaussian(n: usize, seed: u64) -> Vec<f64> {
-        let mut state = seed;
-        let mut uniform = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                let (u, v) = (uniform(), uniform());
-                (-2.0 * u.ln()).sqrt() * (TAU * v).cos()
-            })
-            .collect()
-    }
-
-    #[test]
-    fn am_tone_gives_the_closed_form_envelope_lines() {
-        // x = (1 + m cos 2π f_m t) cos 2π f_c t, every frequency on a bin. In a band
-        // holding f_c ± f_m the analytic signal is (1 + m cos 2π f_m t) e^{2πi f_c t},
-        // so the squared envelope with its mean (1 + m²/2) removed is
-        // 2m cos 2π f_m t + (m²/2) cos 4π f_m t: Hann amplitude lines 2m at f_m and
-        // m²/2 at 2 f_m (docs/model.md §7.4), A/2 of each in the bins beside them.
-        let (n, rate) = (4000, 8000.0);
-        let df = rate / n as f64;
-        let (fc, fm, m) = (600.0 * df, 20.0 * df, 0.4);
-        let x: Vec<f64> = (0..n)
-            .map(|j| {
-                let t = j as f64 / rate;
-                (1.0 + m * (TAU * fm * t).cos()) * (TAU * fc * t).cos()
-            })
-            .collect();
-        let mut plan = EnvelopePlan::new(n, rate).unwrap();
-        let band = Band {
-            low: fc - 100.0 * df,
-            high: fc + 100.0 * df,
-        };
-        let env = plan.analyse(&x, BandChoice::Fixed(band), &[]).unwrap();
-        let (k1, k2) = (20, 40);
-        assert!(
-            (env.spectrum[k1] - 2.0 * m).abs() < 1e-12,
-            "{}",
-            env.spectrum[k1]
-        );
-        assert!(
-            (env.spectrum[k2] - m * m / 2.0).abs() < 1e-12,
-            "{}",
-            env.spectrum[k2]
-        );
-        assert!((env.spectrum[k1 + 1] - m).abs() < 1e-12);
-        // Nothing else: the mean is removed and no other line exists.
-        for (k, a) in env.spectrum.iter().enumerate() {
-            if ![k1 - 1, k1, k1 + 1, k2 - 1, k2, k2 + 1].contains(&k) {
-                assert!(a.abs() < 1e-12, "bin {k}: {a}");
-            }
-        }
-        // A band that misses the sidebands demodulates the carrier alone: no lines.
-        let narrow = Band {
-            low: fc - 5.0 * df,
-            high: fc + 5.0 * df,
-        };
-        let env = plan.analyse(&x, BandChoice::Fixed(narrow), &[]).unwrap();
-        assert!(env.spectrum[k1].abs() < 1e-12, "{}", env.spectrum[k1]);
-    }
-
-    #[test]
-    fn spectral_kurtosis_of_noise_and_of_a_tone() {
-        // Gaussian noise: SK ≈ 0 in every bin away from DC and Nyquist (where X is
-        // nearly real and SK tends to 1: the two STFT bins at each end). With
-        // n = 2^16, L = 256 and hop 128, M = 511 half-overlapping segments, so one
-        // STFT bin's SK scatters by about 2/√M ≈ 0.09; the mean over the inner bins
-        // (125 STFT bins) is within 0.03 of 0.
-        let n = 1 << 16;
-        let x = gaussian(n, 7);
-        let mut plan = EnvelopePlan::new(n, 1.0).unwrap();
-        let env = plan.analyse(&x, BandChoice::Auto, &[]).unwrap();
-        let segment = stft_segment(n);
-        assert_eq!(env.spectral_kurtosis.len(), segment / 2 + 1);
-        assert_eq!(sk_frequencies(n, 1.0), frequencies(segment, 1.0));
-        let inner = &env.spectral_kurtosis[2..segment / 2 - 1];
-        let mean = inner.iter().sum::<f64>() / inner.len() as f64;
-        assert!(mean.abs() < 0.03, "mean SK of noise {mean}");
-        let worst = inner.iter().fold(0.0f64, |a, s| a.max(s.abs()));
-        assert!(worst < 0.8, "largest |SK| of noise {worst}");
-        // A tone: |X_{m,k}| is the same in every segment, so SK = −1 near its
-        // frequency (to the leakage of its negative-frequency image, < 1e-6 here).
-        let f0 = 0.1234;
-        let tone: Vec<f64> = (0..n).map(|j| (TAU * f0 * j as f64 + 0.3).cos()).collect();
-        let env = plan.analyse(&tone, BandChoice::Auto, &[]).unwrap();
-        // Its STFT bin and the two beside it, within the Hann main lobe.
-        let k0 = (f0 * segment as f64).round() as usize;
-        for k in k0 - 1..=k0 + 1 {
-            let sk = env.spectral_kurtosis[k];
-            assert!((sk + 1.0).abs() < 1e-6, "bin {k}: SK of a tone {sk}");
-        }
-    }
-
-    #[test]
-    fn kurtogram_finds_the_resonance_of_an_impulse_train() {
-        // Impulses every 1/97 s ring a resonance at 6 kHz (damping ratio 0.02, about
-        // 240 Hz wide, decay time 1.3 ms) in white noise of twice their power;
-        // sampled at 25.6 kHz. The chosen band must hold 6 kHz, be at most an eighth
-        // of the spectrum wide (1.6 kHz), and its kurtosis be over 0.5 and five times
-        // the whole band's (measured: 0.98 against 0.096).
-        let (n, rate) = (1 << 15, 25_600.0);
-        let (f_res, zeta, period) = (6000.0, 0.02, 1.0 / 97.0);
-        let noise = gaussian(n, 11);
-        let x: Vec<f64> = (0..n)
-            .map(|j| {
-                let t = j as f64 / rate;
-                let since = t % period;
-                let ring = (-zeta * TAU * f_res * since).exp() * (TAU * f_res * since).sin();
-                3.0 * ring + 1.5 * noise[j]
-            })
-            .collect();
-        let mut plan = EnvelopePlan::new(n, rate).unwrap();
-        let choice = plan.kurtogram(&x).unwrap();
-        assert!(
-            choice.band.contains(f_res),
-            "band {:?} misses the resonance",
-            choice.band
-        );
-        assert!(
-            choice.band.high - choice.band.low <= rate / 16.0,
-            "band {:?} too wide",
-            choice.band
-        );
-        let whole = plan.bands()[0].1;
-        let mut whole_plan = EnvelopePlan::new(n, rate).unwrap();
-        let env = whole_plan
-            .analyse(&x, BandChoice::Fixed(whole), &[])
-            .unwrap();
-        assert!(
-            choice.kurtosis > 0.5 && choice.kurtosis > 5.0 * env.band_kurtosis,
-            "band kurtosis {} vs whole {}",
-            choice.kurtosis,
-            env.band_kurtosis
-        );
-        // Its envelope spectrum has its largest line at the impulse rate.
-        let env = plan.analyse(&x, BandChoice::Kurtogram, &[]).unwrap();
-        let df = rate / n as f64;
-        let k = (1..200)
-            .max_by(|&a, &b| env.spectrum[a].total_cmp(&env.spectrum[b]))
-            .unwrap();
-        assert!(
-            (k as f64 * df - 97.0).abs() <= df,
-            "line at {} Hz",
-            k as f64 * df
-        );
-    }
-
-    #[test]
-    fn band_kurtosis_from_the_bins_equals_the_analytic_signal_s() {
-        // The lag form of docs/model.md §7.6 against the moments of z itself, for
-        // even and odd n, narrow bands, a band at DC and the whole band (whose lag
-        // n/2 meets its mirror for even n).
-        for n in [500, 501, 1024] {
-            let x: Vec<f64> = gaussian(n, 9)
-                .iter()
-                .enumerate()
-                .map(|(j, g)| g + 3.0 * (TAU * 0.1 * j as f64).cos().powi(9))
-                .collect();
-            let mut plan = EnvelopePlan::new(n, 1.0).unwrap();
-            plan.load(&x).unwrap();
-            for band in [
-                Band {
-                    low: 0.0,
-                    high: 0.5,
-                },
-                Band {
-                    low: 0.0,
-                    high: 0.07,
-                },
-                Band {
-                    low: 0.08,
-                    high: 0.13,
-                },
-                Band {
-                    low: 0.3,
-                    high: 0.5,
-                },
-                Band {
-                    low: 0.101,
-                    high: 0.1015,
-                },
-            ] {
-                let fast = plan.band_kurtosis(band);
-                plan.analytic_signal(band);
-                let p: Vec<f64> = plan.analytic.iter().map(|z| z.norm_sqr()).collect();
-                let m2 = p.iter().sum::<f64>() / n as f64;
-                let m4 = p.iter().map(|q| q * q).sum::<f64>() / n as f64;
-                let direct = m4 / (m2 * m2) - 2.0;
-                if direct.is_nan() {
-                    assert!(fast.is_nan(), "n {n} {band:?}: {fast}");
-                } else {
-                    assert!(
-                        (fast - direct).abs() <= 1e-12 * (1.0 + direct.abs()),
-                        "n {n} {band:?}: {fast} vs {direct}"
-                    );
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn kurtogram_bands_tile_the_spectrum() {
-        let bands = kurtogram_bands(1000.0, 3);
-        // 1 + (2) + (3 + 4) + (6 + 8): levels 0, 1, 1.58, 2, 2.58, 3.
-        assert_eq!(bands.len(), 24);
-        let levels: Vec<f64> = bands.iter().map(|b| b.0).collect();
-        assert!(levels.windows(2).all(|w| w[0] <= w[1]), "{levels:?}");
-        for level in [1.0, 3f64.log2(), 2.0, 1.0 + 3f64.log2(), 3.0] {
-            let at: Vec<Band> = bands.iter().filter(|b| b.0 == level).map(|b| b.1).collect();
-            assert_eq!(at[0].low, 0.0);
-            assert_eq!(at.last().unwrap().high, 500.0);
-            assert!(at.windows(2).all(|w| w[0].high == w[1].low));
-        }
-        assert_eq!(kurtogram_depth(10_000), 6);
-        assert_eq!(kurtogram_depth(100), 1);
-        assert_eq!(kurtogram_depth(20), 0);
-        assert_eq!(stft_segment(10_000), 256);
-        assert_eq!(stft_segment(800), 64);
-        assert_eq!(stft_segment(5), 2);
-    }
-
-    #[test]
-    fn non_finite_samples_give_no_band() {
-        let mut x = gaussian(256, 3);
-        x[10] = f64::NAN;
-        let mut plan = EnvelopePlan::new(256, 1.0).unwrap();
-        let env = plan.analyse(&x, BandChoice::Auto, &[]).unwrap();
-        assert!(env.band.low.is_nan() && env.band.high.is_nan());
-        assert!(env.spectrum.iter().all(|a| a.is_nan()));
-        assert!(env.spectral_kurtosis.iter().all(|a| a.is_nan()));
-    }
+/// The first bin and the count of the bins of `band` among the increasing bin
+/// frequencies `freqs` (Hz; `None` when it holds none).
+fn bins_of(freqs: &[f64], band: Band) -> Option<(usize, usize)> {
+    let k0 = freqs.partition_point(|&f| f < band.low);
+    let end = freqs.partition_point(|&f| f <= band.high);
+    (end > k0).then_some((k0, end - k0))
 }
+
+/// `band: auto` takes a band's lags from the window's [`LagTable`] when it needs at
+/// most this many, and from two FFTs per band when it needs more (a high shaft speed's
+/// lines at many bins): the table's cost grows with the lags, the FFTs' does not.
+const LAG_TABLE_MAX: usize = 80;
+
+/// The transform length for a band of `bins` analytic bins of an `n`-sample window:
+/// the smallest `2^a 3^b 5^c ≥ 2 bins − 1` (no aliasing of the squared envelope's
+/// lags), or `n` when that is not shorter.
+fn kurtosis_length(bins: usize, n: usize) -> usize {
+    let min = (2 * bins).saturating_sub(1).max(1);
+    let mut best = min.next_power_of_two();
+    let mut p5 = 1;
+    while p5 < best {
+        let mut p35 = p5;
+        while p35 < best {
+            let mut len = p35;
+            while len < min {
+                len *= 2;
+            }
+            best = best.min(len);
+            p35 *= 3;
+        }
+        p5 *= 5;
+    }
+    best.min(n)
+}
+
+#[cfg(test)]
+pub(crate) mod tests;
