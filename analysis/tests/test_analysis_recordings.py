@@ -32,6 +32,7 @@ def studies(tmp_path_factory):
     binary = os.environ.get("STUDYRUN_BIN")
     if not binary:
         pytest.skip("STUDYRUN_BIN is not set")
+    binary = os.path.abspath(binary)  # the studies run in their own folder
     folder = tmp_path_factory.mktemp("recordings")
     grid = str(REPO / "studies/recordings.yaml")
     run = lambda *args: subprocess.run([binary, *args, "-q"], check=True, cwd=folder)  # noqa: E731
