@@ -606,3 +606,54 @@ fn joint_keys_that_act_on_nothing_are_refused() {
         "{HEAD}grid:\n  joint: [ball_bearing, dry_clearance]\n  ball_count: [8, 9]\n"
     ));
 }
+
+/// An explicit case refuses a key of the joint it does not have: a ball bearing's
+/// own parameter (balls, waviness, stiffness, clearance) on a plain journal, whether
+/// the study or the entry sets the joint, and a `journal_*` parameter on a ball
+/// bearing; the error names the entry's field, the case's joint and what to do.
+/// The same keys on cases of their own joint, beside each other in one study, and
+/// the shared `damping` on a plain journal, are taken.
+#[test]
+fn explicit_cases_refuse_the_other_joints_keys() {
+    for (joint, entry, name) in [
+        ("joint: dry_clearance\n", "{ball_count: 8}", "ball_count"),
+        (
+            "",
+            "{joint: lubricated, waviness_amplitude: \"2 um\"}",
+            "waviness_amplitude",
+        ),
+        ("", "{joint: dry_clearance, stiffness: 1e10}", "stiffness"),
+        (
+            "location: rod_slider\njoint: dry_clearance\n",
+            "{clearance: \"0.01 mm\"}",
+            "clearance",
+        ),
+    ] {
+        let m = refused(&format!(
+            "{HEAD}{joint}cases:\n  - {{rpm: 300}}\n  - {entry}\n"
+        ));
+        assert!(
+            m.contains(&format!("cases[1].{name}"))
+                && m.contains("parameter of the ball bearing")
+                && m.contains("joint: ball_bearing"),
+            "{entry}: {m}"
+        );
+    }
+    let m = refused(&format!(
+        "{HEAD}grid:\n  joint: [dry_clearance]\ncases:\n  - {{joint: ball_bearing, journal_clearance: \"0.1 mm\"}}\n"
+    ));
+    assert!(
+        m.contains("cases[0].journal_clearance")
+            && m.contains("parameter of the plain journal")
+            && m.contains("ball_bearing"),
+        "{m}"
+    );
+    let s = common::study(&format!(
+        "{HEAD}cases:\n  - {{joint: ball_bearing, ball_count: 8}}\n  \
+         - {{joint: dry_clearance, journal_clearance: \"0.1 mm\", damping: 100}}\n  \
+         - {{location: ideal, ball_count: 8}}\n"
+    ));
+    assert_eq!(s.cases[0].params.bearing.ball_count, 8);
+    assert_eq!(s.cases[1].params.journal.geometry.clearance, 0.1e-3);
+    assert_eq!(s.cases[1].params.bearing.damping, 100.0);
+}

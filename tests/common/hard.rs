@@ -348,7 +348,8 @@ pub fn energy_residuals(run: &Run) -> Vec<f64> {
 /// Checks a finished run of `case` and returns what it measured; `name` labels
 /// failures. Asserts:
 ///
-/// * every output, energy and ledger entry is finite at every sample;
+/// * every output (with the force at the case's joint), energy and ledger entry is
+///   finite at every sample;
 /// * the eccentricity is physically possible at every sample. Ball `b`, the one
 ///   nearest the direction of `e`, is at most `π/N_b` away from it, so
 ///   `|e| cos(π/N_b) ≤ e·n_b = δ_b + P_d/2 − Π_b ≤ δ_b + P_d/2 + ΣΠ` (ΣΠ: every
@@ -460,6 +461,7 @@ fn check_common(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Che
     };
     for r in &run.records {
         let s = &r.sample;
+        let f = s.joint_force(case.location).unwrap();
         let values = [
             s.slider_acceleration,
             s.crank_moment,
@@ -467,8 +469,8 @@ fn check_common(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Che
             s.crank_ground_force[1],
             s.crank_rod_force[0],
             s.crank_rod_force[1],
-            s.rod_slider_force[0],
-            s.rod_slider_force[1],
+            f[0],
+            f[1],
             s.eccentricity[0],
             s.eccentricity[1],
             r.kinetic,
@@ -483,7 +485,6 @@ fn check_common(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Che
             "{name}: non-finite output at t = {}: {values:?}",
             r.t
         );
-        let f = s.joint_force(case.location).unwrap();
         c.max_force = c.max_force.max(f[0].hypot(f[1]));
         c.min_loaded = c.min_loaded.min(s.loaded_balls);
         c.max_loaded = c.max_loaded.max(s.loaded_balls);
