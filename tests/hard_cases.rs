@@ -152,6 +152,169 @@ fn rms_after(run: &Run, from: usize) -> f64 {
 }
 
 // ---------------------------------------------------------------------------
+// The cases' parameters and runs, shared with their plain-journal counterparts
+// (tests/clearance_joints.rs)
+// ---------------------------------------------------------------------------
+
+/// Case 1: the paper's case at crank_ground, 300 rpm, with `P_d = 0`.
+pub(crate) fn case01() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing.clearance = 0.0;
+    case
+}
+
+/// Case 2: the paper's case at crank_ground, 300 rpm, with `P_d` = −20 µm.
+pub(crate) fn case02() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing.clearance = -20e-6;
+    case
+}
+
+/// Case 3: the paper's case at crank_ground, 300 rpm, waviness 35 / 25 µm.
+pub(crate) fn case03() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing = wavy(35, 25e-6);
+    case
+}
+
+/// Case 4: the paper's case at crank_ground, 300 rpm, with `balls` balls.
+pub(crate) fn case04(balls: usize) -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing.ball_count = balls;
+    case
+}
+
+/// Case 5: the paper's case at `location`, 6000 rpm.
+pub(crate) fn case05(location: Location) -> CaseParams {
+    paper_case(location, 6000.0)
+}
+
+/// Case 6: the paper's case at crank_ground, 300 rpm, K = 1e11 N/m^1.5.
+pub(crate) fn case06() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing.stiffness = 1e11;
+    case
+}
+
+/// Case 7: the paper's case at crank_ground, 3000 rpm, undamped.
+pub(crate) fn case07() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 3000.0);
+    case.bearing.damping = 0.0;
+    case
+}
+
+/// Case 8: the paper's case at crank_ground, 300 rpm, waviness `number` / 4 µm.
+pub(crate) fn case08(number: u32) -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 300.0);
+    case.bearing = wavy(number, 4e-6);
+    case
+}
+
+/// Case 9: the paper's case at crank_rod, 6000 rpm.
+pub(crate) fn case09() -> CaseParams {
+    paper_case(Location::CrankRod, 6000.0)
+}
+
+/// Case 10: the paper's case at crank_ground, `rpm`, gravity on.
+pub(crate) fn case10(rpm: f64) -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, rpm);
+    case.gravity = true;
+    case
+}
+
+/// Case 12: K = 1e11 N/m^1.5, undamped, `P_d` = 100 µm, 6000 rpm at crank_ground.
+pub(crate) fn case12() -> CaseParams {
+    let mut case = paper_case(Location::CrankGround, 6000.0);
+    case.bearing.stiffness = 1e11;
+    case.bearing.damping = 0.0;
+    case.bearing.clearance = 100e-6;
+    case
+}
+
+/// The first run of a hard case: its label, case, sample times (s), solver
+/// settings and energy-balance limit (of the largest |driver work|).
+pub(crate) struct HardRun {
+    pub name: String,
+    pub case: CaseParams,
+    pub times: Vec<f64>,
+    pub settings: SolverSettings,
+    pub energy_tol: f64,
+}
+
+/// The first run of every case 1–12, as the case makes it (case 11: DOPRI5 with the
+/// switch to SDIRK4 and the case's step budget).
+pub(crate) fn hard_runs() -> Vec<HardRun> {
+    let run = |name: String, case: CaseParams, revolutions: f64, n, rtol, energy_tol| HardRun {
+        name,
+        times: uniform_times(revolutions * revolution(case.rpm), n),
+        case,
+        settings: dopri(rtol),
+        energy_tol,
+    };
+    let mut runs = vec![
+        run("1 zero clearance".into(), case01(), 1.0, 2000, 1e-8, 1e-6),
+        run("2 preload".into(), case02(), 1.0, 2000, 1e-8, 1e-6),
+        run("3 waviness 25 µm".into(), case03(), 1.0, 2000, 1e-8, 1e-6),
+    ];
+    for balls in [3, 40] {
+        runs.push(run(
+            format!("4 {balls} balls"),
+            case04(balls),
+            1.0,
+            2000,
+            1e-8,
+            1e-6,
+        ));
+    }
+    for location in [Location::CrankGround, Location::CrankRod] {
+        let name = format!("5 6000 rpm {location}");
+        runs.push(run(name, case05(location), 3.0, 1500, 1e-8, 1e-6));
+    }
+    runs.push(run("6 K = 1e11".into(), case06(), 1.0, 2000, 1e-8, 1e-6));
+    runs.push(run(
+        "7 C = 0, 50 rev".into(),
+        case07(),
+        50.0,
+        5000,
+        1e-7,
+        1e-3,
+    ));
+    for number in [35, 36, 37] {
+        let name = format!("8 N = {number}");
+        runs.push(run(name, case08(number), 1.0, 2000, 1e-8, 1e-6));
+    }
+    runs.push(run("9 200 rev".into(), case09(), 200.0, 4000, 1e-6, 1e-3));
+    for rpm in [30.0, 150.0] {
+        runs.push(run(
+            format!("10 gravity {rpm} rpm"),
+            case10(rpm),
+            1.0,
+            2000,
+            1e-8,
+            1e-6,
+        ));
+    }
+    let mut stiff = dopri(1e-6);
+    stiff.max_steps = STIFF_BUDGET;
+    runs.push(HardRun {
+        name: "11 stiff".into(),
+        case: stiff_case(1e5),
+        times: uniform_times(0.1, 200),
+        settings: stiff,
+        energy_tol: 1e-3,
+    });
+    runs.push(run(
+        "12 hard impacts".into(),
+        case12(),
+        5.0,
+        2500,
+        1e-8,
+        5e-5,
+    ));
+    runs
+}
+
+// ---------------------------------------------------------------------------
 // 1–10: extreme parameters
 // ---------------------------------------------------------------------------
 
@@ -162,8 +325,7 @@ fn rms_after(run: &Run, from: usize) -> f64 {
 /// dominate, the case is mildly sensitive after ~50 ms).
 #[test]
 fn case01_zero_clearance() {
-    let mut case = paper_case(Location::CrankGround, 300.0);
-    case.bearing.clearance = 0.0;
+    let case = case01();
     let times = uniform_times(revolution(300.0), 2000);
     let tight = on_both(|model| {
         let (run, _) = checked(
@@ -198,8 +360,7 @@ fn case01_zero_clearance() {
 /// (measured 4e-6).
 #[test]
 fn case02_preload_keeps_every_ball_loaded() {
-    let mut case = paper_case(Location::CrankGround, 300.0);
-    case.bearing.clearance = -20e-6;
+    let case = case02();
     let times = uniform_times(revolution(300.0), 2000);
     let tight = on_both(|model| {
         let (run, c) = checked("preload 1e-8", model, &case, &dopri(1e-8), &times, 1e-6);
@@ -228,8 +389,7 @@ fn case02_preload_keeps_every_ball_loaded() {
 /// ≤ 1e-2 (measured 1.4e-4).
 #[test]
 fn case03_waviness_beyond_half_the_clearance() {
-    let mut case = paper_case(Location::CrankGround, 300.0);
-    case.bearing = wavy(35, 25e-6);
+    let case = case03();
     assert!(waviness_extent(&case.bearing) > case.bearing.clearance / 2.0);
     let times = uniform_times(revolution(300.0), 2000);
     let window = &times[..=200];
@@ -267,8 +427,7 @@ fn case03_waviness_beyond_half_the_clearance() {
 #[test]
 fn case04_three_and_forty_balls() {
     for balls in [3, 40] {
-        let mut case = paper_case(Location::CrankGround, 300.0);
-        case.bearing.ball_count = balls;
+        let case = case04(balls);
         let name = format!("{balls} balls");
         let times = uniform_times(revolution(300.0), 2000);
         let window = &times[..=200];
@@ -293,7 +452,7 @@ fn case04_three_and_forty_balls() {
 #[test]
 fn case05_6000_rpm_at_both_locations() {
     for location in [Location::CrankGround, Location::CrankRod] {
-        let case = paper_case(location, 6000.0);
+        let case = case05(location);
         let name = format!("6000 rpm {location}");
         let times = uniform_times(3.0 * revolution(6000.0), 1500);
         let tight = on_both(|model| {
@@ -315,8 +474,7 @@ fn case05_6000_rpm_at_both_locations() {
 /// compared over the first 20 ms: ≤ 1e-2 (measured 1.6e-3).
 #[test]
 fn case06_stiff_contact_k_1e11() {
-    let mut case = paper_case(Location::CrankGround, 300.0);
-    case.bearing.stiffness = 1e11;
+    let case = case06();
     let times = uniform_times(revolution(300.0), 2000);
     let window = &times[..=200];
     let tight = on_both(|model| {
@@ -354,8 +512,7 @@ fn impacts(run: &Run) -> usize {
 /// whose scatter between two valid trajectories exceeds 10 %.)
 #[test]
 fn case07_undamped_impacts_over_50_revolutions() {
-    let mut case = paper_case(Location::CrankGround, 3000.0);
-    case.bearing.damping = 0.0;
+    let case = case07();
     let times = uniform_times(50.0 * revolution(3000.0), 5000);
     let tight = on_both(|model| {
         let (run, c) = checked(
@@ -410,8 +567,7 @@ fn case07_undamped_impacts_over_50_revolutions() {
 #[test]
 fn case08_waviness_number_multiple_of_ball_count() {
     for number in [36, 35, 37] {
-        let mut case = paper_case(Location::CrankGround, 300.0);
-        case.bearing = wavy(number, 4e-6);
+        let case = case08(number);
         let name = format!("N = {number}");
         let times = uniform_times(revolution(300.0), 2000);
         let window = &times[..=200];
@@ -444,7 +600,7 @@ fn case08_waviness_number_multiple_of_ball_count() {
 /// keep the journal on the races).
 #[test]
 fn case09_200_revolutions_without_drift() {
-    let case = paper_case(Location::CrankRod, 6000.0);
+    let case = case09();
     let times = uniform_times(200.0 * revolution(6000.0), 4000);
     let tight = on_both(|model| {
         let (run, c) = checked("200 rev 1e-6", model, &case, &dopri(1e-6), &times, 1e-3);
@@ -503,8 +659,7 @@ fn min_max(x: &[f64], from: usize) -> (f64, f64) {
 /// (measured 6e-5).
 #[test]
 fn case10_gravity_at_low_speed_changes_the_loaded_side() {
-    let mut case = paper_case(Location::CrankGround, 30.0);
-    case.gravity = true;
+    let case = case10(30.0);
     let times = uniform_times(revolution(30.0), 2000);
     let tight = on_both(|model| {
         let (run, _) = checked(
@@ -549,8 +704,7 @@ fn case10_gravity_at_low_speed_changes_the_loaded_side() {
     });
     agree_models("gravity 30 rpm", case.location, &tight, times.len(), 2e-2);
 
-    let mut case = paper_case(Location::CrankGround, 150.0);
-    case.gravity = true;
+    let case = case10(150.0);
     let times = uniform_times(revolution(150.0), 2000);
     let window = &times[..=100];
     let tight = on_both(|model| {
@@ -619,7 +773,7 @@ fn case11_stiff_case_explicit_fails_cleanly_implicit_finishes() {
     let case = stiff_case(1e5);
     let end = 0.1;
     let times = uniform_times(end, 200);
-    let budget = 15_000;
+    let budget = STIFF_BUDGET;
     let lim = Limits {
         energy_tol: 1e-3,
         energy_floor: 1e-9,
@@ -716,6 +870,9 @@ fn case11_stiff_case_explicit_fails_cleanly_implicit_finishes() {
     }
 }
 
+/// Case 11's step budget.
+const STIFF_BUDGET: u64 = 15_000;
+
 /// The stiff case of case 11 and `tests/stiffness.rs`: K = 1e11 N/m^1.5 with a
 /// 20 µm preload, damping `c` (N s/m) two-sided, no waviness, 300 rpm at crank_ground.
 pub(crate) fn stiff_case(damping: f64) -> CaseParams {
@@ -788,10 +945,7 @@ fn compare_stiff(name: &str, run: &Run, reference: &Run, scale: f64) {
 /// - a step below 16 ε |t| ends the run with `StepSizeTooSmall` (`check_step_size`).
 #[test]
 fn case12_step_control_at_contact_onsets() {
-    let mut case = paper_case(Location::CrankGround, 6000.0);
-    case.bearing.stiffness = 1e11;
-    case.bearing.damping = 0.0;
-    case.bearing.clearance = 100e-6;
+    let case = case12();
     let end = 5.0 * revolution(6000.0);
     let times = uniform_times(end, 2500);
     let runs = on_both(|model| {

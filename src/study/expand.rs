@@ -101,7 +101,7 @@ fn build_simulated(
         (&groups, &axes_names),
         (total, count),
     )?;
-    check_joint_keys(&ctx, &file, &cases)?;
+    check_joint_keys(ctx, &file, &cases)?;
     let references = assign_references(&mut cases);
     let transient = transient_of(ctx, &file, &sampling, &cases)?;
     let sensors = match &file.sensors {

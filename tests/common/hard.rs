@@ -348,7 +348,8 @@ pub fn energy_residuals(run: &Run) -> Vec<f64> {
 /// Checks a finished run of `case` and returns what it measured; `name` labels
 /// failures. Asserts:
 ///
-/// * every output, energy and ledger entry is finite at every sample;
+/// * every output (with the force at the case's joint), energy and ledger entry is
+///   finite at every sample;
 /// * the eccentricity is physically possible at every sample. Ball `b`, the one
 ///   nearest the direction of `e`, is at most `π/N_b` away from it, so
 ///   `|e| cos(π/N_b) ≤ e·n_b = δ_b + P_d/2 − Π_b ≤ δ_b + P_d/2 + ΣΠ` (ΣΠ: every
@@ -372,46 +373,8 @@ pub fn energy_residuals(run: &Run) -> Vec<f64> {
 /// * constraint residuals stay below [`POSITION_RESIDUAL_LIMIT`] and
 ///   [`VELOCITY_RESIDUAL_LIMIT`] at every sample.
 pub fn check_run(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Checks {
+    let mut c = check_common(name, case, run, limits);
     let b = &case.bearing;
-    let mut c = Checks {
-        min_loaded: usize::MAX,
-        force_bound_ratio: f64::NAN,
-        ..Checks::default()
-    };
-    for r in &run.records {
-        let s = &r.sample;
-        let values = [
-            s.slider_acceleration,
-            s.crank_moment,
-            s.crank_ground_force[0],
-            s.crank_ground_force[1],
-            s.crank_rod_force[0],
-            s.crank_rod_force[1],
-            s.eccentricity[0],
-            s.eccentricity[1],
-            r.kinetic,
-            r.potential,
-            r.contact_potential,
-            r.ledger.driver_work,
-            r.ledger.explicit_potential_work,
-            r.ledger.dissipated,
-        ];
-        assert!(
-            values.iter().all(|v| v.is_finite()),
-            "{name}: non-finite output at t = {}: {values:?}",
-            r.t
-        );
-        let f = s.joint_force(case.location).unwrap();
-        c.max_force = c.max_force.max(f[0].hypot(f[1]));
-        c.min_loaded = c.min_loaded.min(s.loaded_balls);
-        c.max_loaded = c.max_loaded.max(s.loaded_balls);
-        c.max_position_residual = c.max_position_residual.max(r.position_residual);
-        c.max_velocity_residual = c.max_velocity_residual.max(r.velocity_residual);
-    }
-    let last = run.records.last().unwrap();
-    c.end_position_residual = last.position_residual;
-    c.end_velocity_residual = last.velocity_residual;
-
     // Eccentricity bounds; a relative slack of 1e-12 (plus 1e-15 m) covers round-off.
     let within = |e: f64, bound: f64| e <= bound * (1.0 + 1e-12) + 1e-15;
     let spacing = (PI / b.ball_count as f64).cos();
@@ -458,6 +421,79 @@ pub fn check_run(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Ch
         c.run_bound_ratio = c.run_bound_ratio.max(e / run_bound);
         c.plain_bound_ratio = c.plain_bound_ratio.max(e / plain_bound);
     }
+
+    c
+}
+
+/// Checks a finished run of a plain-journal `case` (docs/model.md §2.10); `name`
+/// labels failures. Asserts what [`check_run`] asserts of every output, the energy
+/// balance and the residuals, and the journal's eccentricity bound: the journal
+/// penetrates the bushing by `δ = |e| − c`, whose contact potential
+/// `0.4 K δ^{5/2}` is the sample's contact potential (a journal has one contact),
+/// so `|e| ≤ c + (V_contact / (0.4 K))^{2/5}` at every sample, rigorous for any
+/// damping law and for the lubricated joint (whose film adds no potential).
+pub fn check_plain_run(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Checks {
+    assert!(case.joint.is_plain(), "{name}: not a plain journal");
+    let mut c = check_common(name, case, run, limits);
+    let k = case.journal.contact_stiffness();
+    let clearance = case.journal.geometry.clearance;
+    for r in &run.records {
+        let e = r.sample.eccentricity[0].hypot(r.sample.eccentricity[1]);
+        c.max_eccentricity = c.max_eccentricity.max(e);
+        let bound = clearance + (r.contact_potential / (0.4 * k)).powf(0.4);
+        assert!(
+            e <= bound * (1.0 + 1e-9) + 1e-15,
+            "{name}: |e| = {e:e} m above the journal's energy bound {bound:e} m at t = {}",
+            r.t
+        );
+        c.energy_bound_ratio = c.energy_bound_ratio.max(e / bound);
+    }
+    c
+}
+
+/// The checks both kinds of joint share: every output, energy and ledger entry is
+/// finite, the energy balance closes and the residuals stay below their limits.
+fn check_common(name: &str, case: &CaseParams, run: &Run, limits: Limits) -> Checks {
+    let mut c = Checks {
+        min_loaded: usize::MAX,
+        force_bound_ratio: f64::NAN,
+        ..Checks::default()
+    };
+    for r in &run.records {
+        let s = &r.sample;
+        let f = s.joint_force(case.location).unwrap();
+        let values = [
+            s.slider_acceleration,
+            s.crank_moment,
+            s.crank_ground_force[0],
+            s.crank_ground_force[1],
+            s.crank_rod_force[0],
+            s.crank_rod_force[1],
+            f[0],
+            f[1],
+            s.eccentricity[0],
+            s.eccentricity[1],
+            r.kinetic,
+            r.potential,
+            r.contact_potential,
+            r.ledger.driver_work,
+            r.ledger.explicit_potential_work,
+            r.ledger.dissipated,
+        ];
+        assert!(
+            values.iter().all(|v| v.is_finite()),
+            "{name}: non-finite output at t = {}: {values:?}",
+            r.t
+        );
+        c.max_force = c.max_force.max(f[0].hypot(f[1]));
+        c.min_loaded = c.min_loaded.min(s.loaded_balls);
+        c.max_loaded = c.max_loaded.max(s.loaded_balls);
+        c.max_position_residual = c.max_position_residual.max(r.position_residual);
+        c.max_velocity_residual = c.max_velocity_residual.max(r.velocity_residual);
+    }
+    let last = run.records.last().unwrap();
+    c.end_position_residual = last.position_residual;
+    c.end_velocity_residual = last.velocity_residual;
 
     // Energy balance.
     c.energy_residual = energy_residuals(run)

@@ -323,6 +323,7 @@ pub(super) fn expand_explicit(
                     }
                 }
             }
+            super::check_explicit_joint_keys(ctx, c, &explicit.value, &params)?;
             let id = cases.len() as u64;
             cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
         }

@@ -4,6 +4,7 @@
 use super::*;
 use crate::study::config::JournalSection;
 use crate::study::params::{is_ball_parameter, is_journal_parameter};
+use indexmap::IndexMap;
 
 /// The `journal:` section: its grid parameters (`journal_*`) through the parameter
 /// table, the material, stiffness and friction speeds read in their units.
@@ -114,6 +115,42 @@ pub(super) fn check_joint_keys(
                 ),
             ));
         }
+    }
+    Ok(())
+}
+
+/// Refuses a key of explicit case `c` (its entry `explicit`, `params` the case it
+/// makes) that acts on no joint of it: a ball bearing's own parameter on a plain
+/// journal, a `journal_*` parameter on a ball bearing. An ideal case has no joint
+/// and is not checked here.
+pub(super) fn check_explicit_joint_keys(
+    ctx: &Ctx<'_>,
+    c: usize,
+    explicit: &IndexMap<String, S<CaseValue>>,
+    params: &CaseParams,
+) -> Result<(), StudyError> {
+    if params.location == Site::Ideal {
+        return Ok(());
+    }
+    let plain = params.joint.is_plain();
+    for (name, value) in explicit {
+        let Some(p) = lookup(name) else { continue };
+        let (kind, other) = if plain && is_ball_parameter(p) {
+            ("ball bearing", "ball_bearing")
+        } else if !plain && is_journal_parameter(p) {
+            ("plain journal", "dry_clearance or lubricated")
+        } else {
+            continue;
+        };
+        return Err(ctx.err(
+            Some(at(&value.referenced)),
+            &format!("cases[{c}].{name}"),
+            format!(
+                "{name} is a parameter of the {kind}, and this case's joint is {} at {}; \
+                 it would act on nothing: remove it, or give the case `joint: {other}`",
+                params.joint, params.location
+            ),
+        ));
     }
     Ok(())
 }

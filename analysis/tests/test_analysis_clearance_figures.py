@@ -1,0 +1,73 @@
+"""analysis/clearance_figures.py on a small clearance study (studies/clearance.yaml at
+5000 rpm, two clearances, 0.024 s at 20 kHz) run with STUDYRUN_BIN: the script writes
+its three figures, and refuses a selection with no case and a file without the series."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from analysis import clearance_figures
+from analysis.studyfile import open_study
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def small_study(text):
+    """studies/clearance.yaml shortened: 0.024 s at 20 kHz, 5000 rpm, 0.5 and 0.1 mm."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith("duration:"):
+            line = "duration: 0.024"
+        elif line.startswith("sample_rate:"):
+            line = "sample_rate: 20000"
+        elif line.strip().startswith("rpm: [2000, 5000]"):
+            line = "  rpm: [5000]"
+        elif line.strip().startswith("journal_clearance:"):
+            line = '  journal_clearance: ["0.5 mm", "0.1 mm"]'
+        elif "rpm: 2000}" in line:
+            continue
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+@pytest.fixture(scope="module")
+def clearance(tmp_path_factory):
+    binary = os.environ.get("STUDYRUN_BIN")
+    if not binary:
+        pytest.skip("STUDYRUN_BIN is not set")
+    work = tmp_path_factory.mktemp("clearance")
+    grid = work / "clearance.yaml"
+    grid.write_text(small_study((REPO / "studies/clearance.yaml").read_text()))
+    out = work / "clearance.h5"
+    subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
+    with open_study(out) as ds:
+        yield ds.load(), out
+
+
+def test_draws_the_three_figures(clearance, tmp_path, assert_png):
+    ds, _ = clearance
+    assert list(clearance_figures.dry_cases(ds, 5000.0, 0.01)) == [0.5e-3, 0.1e-3]
+    paths = clearance_figures.draw(ds, tmp_path, 5000.0, 0.01)
+    assert [p.name for p in paths] == [
+        f"clearance_{name}_5000rpm_mu0.01.png" for name in ("slider_acceleration", "orbit", "contact_force")
+    ]
+    for path in paths:
+        assert_png(path)
+
+
+def test_command_line(clearance, tmp_path):
+    _, path = clearance
+    assert clearance_figures.main([str(path), str(tmp_path), "--friction", "0"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"clearance_{name}_5000rpm_mu0.png" for name in ("contact_force", "orbit", "slider_acceleration")
+    ]
+
+
+def test_refuses_what_is_not_there(clearance, tmp_path):
+    ds, _ = clearance
+    with pytest.raises(ValueError, match="no successful dry_clearance case at 2000"):
+        clearance_figures.orbit(ds, tmp_path / "x.png", 2000.0, 0.01)
+    with pytest.raises(ValueError, match="stores no eccentricity_x"):
+        clearance_figures.orbit(ds.drop_vars("eccentricity_x"), tmp_path / "x.png", 5000.0, 0.01)
