@@ -30,34 +30,10 @@ fn dry(location: Location, rpm: f64, c: f64, mu: f64) -> CaseParams {
 }
 
 /// Largest energy-balance residual relative to the largest |driver work|, and the
-/// dissipated energy (J), over `revolutions`.
+/// dissipated energy (J), over `revolutions`, DOP853 at rtol 1e-11.
 fn balance(case: &CaseParams, revolutions: f64) -> (f64, f64) {
-    let mut mech = SliderCrank::new(case).unwrap().with_energy_ledger(true);
-    let y0 = mech.initial_state();
-    let duration = revolutions * 60.0 / case.rpm;
-    let times: Vec<f64> = (0..=400).map(|k| duration * k as f64 / 400.0).collect();
-    let mut start = None;
-    let (mut worst, mut scale, mut dissipated) = (0.0f64, 0.0f64, 0.0);
-    integrate(
-        &mut mech,
-        &dop853(1e-11, 1e-15),
-        0.0,
-        &y0,
-        &times,
-        |m, t, y| {
-            let e = m.energy(t, y)?;
-            let l = m.ledger(y);
-            let (ke0, v0) = *start.get_or_insert((e.kinetic, e.potential));
-            let residual = l.driver_work
-                - (e.kinetic - ke0 + e.potential - v0 - l.explicit_potential_work + l.dissipated);
-            worst = worst.max(residual.abs());
-            scale = scale.max(l.driver_work.abs());
-            dissipated = l.dissipated;
-            Ok(())
-        },
-    )
-    .unwrap();
-    (worst / scale, dissipated)
+    let b = crate::common::production_balance(case, revolutions, 1e-11, 1e-15);
+    (b.relative, b.dissipated)
 }
 
 /// Friction is the only dissipation of an undamped dry journal: the balance
