@@ -76,6 +76,7 @@ impl Dimension {
                 ("µm", P(-6)),
                 ("μm", P(-6)),
                 ("nm", P(-9)),
+                ("in", X(0.0254)),
             ],
             Dimension::Speed => &[
                 ("rpm", P(0)),
@@ -204,6 +205,7 @@ mod tests {
     fn parses_numbers_with_units() {
         assert_eq!(Length.parse("40 um").unwrap(), 40e-6);
         assert_eq!(Length.parse("4µm").unwrap(), 4e-6);
+        assert_eq!(Length.parse("0.3126 in").unwrap(), 0.3126 * 0.0254);
         assert_eq!(Length.parse("0.04 mm").unwrap(), 0.04e-3);
         assert_eq!(Speed.parse("300 rpm").unwrap(), 300.0);
         assert_eq!(Speed.parse("5 Hz").unwrap(), 300.0);
