@@ -404,7 +404,7 @@ pub const ECCENTRICITY_SLACK: f64 = 1e-6;
 ///   diameter `D = (d_o − d_i)/2`: a contact deflection of a tenth of the ball is far
 ///   beyond elastic (Hertz) contact of steel; the load is too high for the bearing.
 ///
-/// A plain journal ([`check_journal`]) has the radial clearance `c` for the gap, its
+/// A plain journal (`check_journal`) has the radial clearance `c` for the gap, its
 /// contact stiffness for the Hertz penetration and a tenth of its radius for the
 /// elastic bound. The ideal mechanism has no bearing and is not checked
 /// (docs/model.md §5.4).

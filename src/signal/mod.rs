@@ -39,7 +39,7 @@ const DEVIATION_CHANNELS: [(&str, &str); 3] = [
 ];
 
 /// The per-case metric variables, in file order: those of every `simulated` study
-/// ([`simulation_metric_specs`]; none for a study of measured recordings), then,
+/// (`simulation_metric_specs`; none for a study of measured recordings), then,
 /// for a study with `envelope:` ([`envelope_metric_specs`]), the envelope metrics,
 /// then `wall_time` (always last).
 pub fn metric_specs(envelope: Option<&EnvelopeSettings>, simulated: bool) -> Vec<VarSpec> {
