@@ -1,14 +1,17 @@
 """Figures of the clearance-joint benchmark (studies/clearance.yaml, docs/model.md
 §3.10): the slider acceleration of dry journals of every clearance against the ideal
 mechanism, the journal centre's orbit inside its clearance circle, and the joint's
-contact force. Each function writes one PNG and returns its path; it raises
-ValueError when the study lacks what it needs.
+contact force; and, of the bifurcation sweep (studies/clearance_bifurcation.yaml), the
+Poincaré sections of the slider acceleration over crank speed for each clearance. Each
+function writes one PNG and returns its path; it raises ValueError when the study lacks
+what it needs.
 
 `ds` is the flat study Dataset of `studyfile.open_study`; the cases drawn are the
 successful `dry_clearance` cases at one crank speed `rpm` and friction coefficient
 `friction`, one curve per radial clearance `journal_clearance`, largest first.
 
     python analysis/clearance_figures.py clearance.h5 docs/img [--rpm 5000] [--friction 0.01]
+    python analysis/clearance_figures.py clearance_bifurcation.h5 docs/img --bifurcation
 
 A missing or non-HDF5 file ends the program with a one-line message.
 """
@@ -121,6 +124,50 @@ def contact_force(ds, out, rpm, friction, dpi=150):
     return _save(fig, out, dpi)
 
 
+def poincare(ds, case, series, last=0.5):
+    """`series` (one value per stored time) of `case` at the sample nearest each whole
+    crank revolution `k · 60 / rpm` in the `last` fraction of the stored time: its
+    Poincaré section (a period-n motion gives n points, a chaotic one a spread)."""
+    t = ds["time"].values
+    period = 60.0 / parameter_value(ds, "rpm", case)
+    dt = t[1] - t[0]
+    first = t[0] + (1.0 - last) * (t[-1] - t[0])
+    revolutions = np.arange(math.ceil(first / period), math.floor(t[-1] / period) + 1)
+    index = np.rint((revolutions * period - t[0]) / dt).astype(int)
+    return series[index[(index >= 0) & (index < len(t))]]
+
+
+def bifurcation(ds, out, dpi=150):
+    """Poincaré sections of the slider acceleration against crank speed, one panel per
+    radial clearance (largest first), beside the ideal mechanism's (black bars); a point
+    whose replicates part (`chaotic`) is drawn in red, with the number of such points in
+    the panel's title."""
+    _need(ds, "slider_acceleration", "chaotic")
+    acceleration = ds["slider_acceleration"].values
+    ideal = reference_for(ds, ["slider_acceleration"])["slider_acceleration"].values
+    points = {}
+    for case in range(ds.sizes["case"]):
+        if text(ds["joint"].values[case]) == DRY and ds["status"].values[case] == 1:
+            points.setdefault(parameter_value(ds, "journal_clearance", case), []).append(case)
+    if not points:
+        raise ValueError(f"no successful {DRY} case")
+    fig, axes = plt.subplots(len(points), 1, sharex=True, squeeze=False, figsize=(7.0, 1.5 * len(points) + 0.9))
+    for ax, (clearance, cases) in zip(axes[:, 0], sorted(points.items(), reverse=True)):
+        chaotic = 0
+        for case in cases:
+            rpm = parameter_value(ds, "rpm", case)
+            section = poincare(ds, case, acceleration[case]) / 1e3
+            flag = bool(ds["chaotic"].values[case])
+            chaotic += flag
+            ax.plot(np.full(section.shape, rpm), section, ".", ms=3, color="tab:red" if flag else "tab:blue")
+            ax.plot([rpm], [poincare(ds, case, ideal[case])[-1] / 1e3], "_", ms=14, color="black")
+        ax.set_ylabel("km/s²")
+        ax.set_title(f"{_label(clearance)}: {chaotic} of {len(cases)} speeds chaotic", fontsize=8)
+    axes[-1, 0].set_xlabel("crank speed (rpm)")
+    fig.suptitle("Poincaré sections of the slider acceleration, dry journal at rod_slider")
+    return _save(fig, out, dpi)
+
+
 FIGURES = {"slider_acceleration": slider_acceleration, "orbit": orbit, "contact_force": contact_force}
 """The figures, by the suffix of their file name."""
 
@@ -138,10 +185,14 @@ def main(argv=None):
     parser.add_argument("outdir", help="directory of the PNGs")
     parser.add_argument("--rpm", type=float, default=5000.0, help="crank speed of the cases drawn (rpm)")
     parser.add_argument("--friction", type=float, default=0.01, help="friction coefficient of the cases drawn")
+    parser.add_argument("--bifurcation", action="store_true", help="draw the bifurcation sweep's Poincaré sections instead")
     args = parser.parse_args(argv)
     study_file_or_exit("clearance_figures", args.study)
     with open_study(args.study) as ds:
         ds = ds.load()
+        if args.bifurcation:
+            print(bifurcation(ds, f"{args.outdir}/clearance_bifurcation.png"))
+            return 0
         for path in draw(ds, args.outdir, args.rpm, args.friction):
             print(path)
     return 0

@@ -1,6 +1,8 @@
 """analysis/clearance_figures.py on a small clearance study (studies/clearance.yaml at
 5000 rpm, two clearances, 0.024 s at 20 kHz) run with STUDYRUN_BIN: the script writes
-its three figures, and refuses a selection with no case and a file without the series."""
+its three figures, and refuses a selection with no case and a file without the series;
+and on a small bifurcation sweep (studies/clearance_bifurcation.yaml, two clearances ×
+two speeds): one Poincaré point per whole revolution of the last half, and the figure."""
 
 import os
 import subprocess
@@ -71,3 +73,53 @@ def test_refuses_what_is_not_there(clearance, tmp_path):
         clearance_figures.orbit(ds, tmp_path / "x.png", 2000.0, 0.01)
     with pytest.raises(ValueError, match="stores no eccentricity_x"):
         clearance_figures.orbit(ds.drop_vars("eccentricity_x"), tmp_path / "x.png", 5000.0, 0.01)
+
+
+def small_sweep(text):
+    """studies/clearance_bifurcation.yaml shortened: 0.06 s at 20 kHz, 2 replicates,
+    0.5 and 0.02 mm at 2000 and 5000 rpm."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith("duration:"):
+            line = "duration: 0.06"
+        elif line.startswith("sample_rate:"):
+            line = "sample_rate: 20000"
+        elif line.strip().startswith("count:"):
+            line = "  count: 2"
+        elif line.strip().startswith("journal_clearance:"):
+            line = '  journal_clearance: ["0.5 mm", "0.02 mm"]'
+        elif line.strip().startswith("rpm:"):
+            line = "  rpm: [2000, 5000]"
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    binary = os.environ.get("STUDYRUN_BIN")
+    if not binary:
+        pytest.skip("STUDYRUN_BIN is not set")
+    work = tmp_path_factory.mktemp("sweep")
+    grid = work / "sweep.yaml"
+    grid.write_text(small_sweep((REPO / "studies/clearance_bifurcation.yaml").read_text()))
+    out = work / "sweep.h5"
+    subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
+    with open_study(out) as ds:
+        yield ds.load(), out
+
+
+def test_poincare_sections_and_the_bifurcation_figure(sweep, tmp_path, assert_png):
+    ds, path = sweep
+    assert ds.sizes["case"] == 4
+    for case in range(4):
+        rpm = float(ds["rpm"].values[case])
+        section = clearance_figures.poincare(ds, case, ds["slider_acceleration"].values[case])
+        # The whole revolutions k·60/rpm in the last half of 0.06 s: 0.03 s ≤ t ≤ 0.06 s.
+        period = 60.0 / rpm
+        expected = int(0.06 / period + 1e-9) - int(-(-0.03 // period)) + 1
+        assert len(section) == expected, (rpm, len(section), expected)
+    assert_png(clearance_figures.bifurcation(ds, tmp_path / "b.png"))
+    assert clearance_figures.main([str(path), str(tmp_path), "--bifurcation"]) == 0
+    assert_png(tmp_path / "clearance_bifurcation.png")
+    with pytest.raises(ValueError, match="stores no chaotic"):
+        clearance_figures.bifurcation(ds.drop_vars("chaotic"), tmp_path / "x.png")
