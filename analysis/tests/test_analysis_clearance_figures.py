@@ -34,18 +34,24 @@ def small_study(text):
     return "\n".join(out) + "\n"
 
 
-@pytest.fixture(scope="module")
-def clearance(tmp_path_factory):
+def run_shortened(tmp_path_factory, name, shorten):
+    """studies/<name>.yaml shortened by `shorten`, run with STUDYRUN_BIN (skipped
+    without it): the loaded Dataset and the file's path."""
     binary = os.environ.get("STUDYRUN_BIN")
     if not binary:
         pytest.skip("STUDYRUN_BIN is not set")
-    work = tmp_path_factory.mktemp("clearance")
-    grid = work / "clearance.yaml"
-    grid.write_text(small_study((REPO / "studies/clearance.yaml").read_text()))
-    out = work / "clearance.h5"
+    work = tmp_path_factory.mktemp(name)
+    grid = work / f"{name}.yaml"
+    grid.write_text(shorten((REPO / f"studies/{name}.yaml").read_text()))
+    out = work / f"{name}.h5"
     subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
     with open_study(out) as ds:
-        yield ds.load(), out
+        return ds.load(), out
+
+
+@pytest.fixture(scope="module")
+def clearance(tmp_path_factory):
+    return run_shortened(tmp_path_factory, "clearance", small_study)
 
 
 def test_draws_the_three_figures(clearance, tmp_path, assert_png):
@@ -96,16 +102,7 @@ def small_sweep(text):
 
 @pytest.fixture(scope="module")
 def sweep(tmp_path_factory):
-    binary = os.environ.get("STUDYRUN_BIN")
-    if not binary:
-        pytest.skip("STUDYRUN_BIN is not set")
-    work = tmp_path_factory.mktemp("sweep")
-    grid = work / "sweep.yaml"
-    grid.write_text(small_sweep((REPO / "studies/clearance_bifurcation.yaml").read_text()))
-    out = work / "sweep.h5"
-    subprocess.run([binary, str(grid), "-o", str(out), "-j", "2", "--force", "-q"], check=True)
-    with open_study(out) as ds:
-        yield ds.load(), out
+    return run_shortened(tmp_path_factory, "clearance_bifurcation", small_sweep)
 
 
 def test_poincare_sections_and_the_bifurcation_figure(sweep, tmp_path, assert_png):
