@@ -16,22 +16,26 @@ from analysis.studyfile import open_study
 REPO = Path(__file__).resolve().parents[2]
 
 
-def small_study(text):
-    """studies/clearance.yaml shortened: 0.024 s at 20 kHz, 5000 rpm, 0.5 and 0.1 mm."""
+def shortened(text, lines, drop=None):
+    """`text` with each line whose stripped start is a key of `lines` replaced by its
+    value, and the lines containing `drop` left out."""
     out = []
     for line in text.splitlines():
-        if line.startswith("duration:"):
-            line = "duration: 0.024"
-        elif line.startswith("sample_rate:"):
-            line = "sample_rate: 20000"
-        elif line.strip().startswith("rpm: [2000, 5000]"):
-            line = "  rpm: [5000]"
-        elif line.strip().startswith("journal_clearance:"):
-            line = '  journal_clearance: ["0.5 mm", "0.1 mm"]'
-        elif "rpm: 2000}" in line:
+        if drop is not None and drop in line:
             continue
-        out.append(line)
+        out.append(next((new for start, new in lines.items() if line.strip().startswith(start)), line))
     return "\n".join(out) + "\n"
+
+
+def small_study(text):
+    """studies/clearance.yaml shortened: 0.024 s at 20 kHz, 5000 rpm, 0.5 and 0.1 mm."""
+    lines = {
+        "duration:": "duration: 0.024",
+        "sample_rate:": "sample_rate: 20000",
+        "rpm: [2000, 5000]": "  rpm: [5000]",
+        "journal_clearance:": '  journal_clearance: ["0.5 mm", "0.1 mm"]',
+    }
+    return shortened(text, lines, drop="rpm: 2000}")
 
 
 def run_shortened(tmp_path_factory, name, shorten):
@@ -84,20 +88,14 @@ def test_refuses_what_is_not_there(clearance, tmp_path):
 def small_sweep(text):
     """studies/clearance_bifurcation.yaml shortened: 0.06 s at 20 kHz, 2 replicates,
     0.5 and 0.02 mm at 2000 and 5000 rpm."""
-    out = []
-    for line in text.splitlines():
-        if line.startswith("duration:"):
-            line = "duration: 0.06"
-        elif line.startswith("sample_rate:"):
-            line = "sample_rate: 20000"
-        elif line.strip().startswith("count:"):
-            line = "  count: 2"
-        elif line.strip().startswith("journal_clearance:"):
-            line = '  journal_clearance: ["0.5 mm", "0.02 mm"]'
-        elif line.strip().startswith("rpm:"):
-            line = "  rpm: [2000, 5000]"
-        out.append(line)
-    return "\n".join(out) + "\n"
+    lines = {
+        "duration:": "duration: 0.06",
+        "sample_rate:": "sample_rate: 20000",
+        "count:": "  count: 2",
+        "journal_clearance:": '  journal_clearance: ["0.5 mm", "0.02 mm"]',
+        "rpm:": "  rpm: [2000, 5000]",
+    }
+    return shortened(text, lines)
 
 
 @pytest.fixture(scope="module")
