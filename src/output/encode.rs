@@ -158,27 +158,68 @@ pub(super) fn filters(storage: Storage) -> Vec<hdf5::filters::Filter> {
 /// HDF5's Fletcher-32 checksum of `data` (`H5_checksum_fletcher32`): sums of its
 /// big-endian 16-bit words (a last odd byte as the high byte of a word), folded to
 /// 16 bits every 360 words; the Fletcher-32 filter appends it little-endian.
+///
+/// Per block of `L` words `w_i` the running sums become `sum1 + Σ w_i` and
+/// `sum2 + L·sum1 + Σ (L − i) w_i` (wrapping, as the word-by-word definition wraps);
+/// the block sums come from eight interleaved lanes ([`block_sums`]), so the loop
+/// runs on vector registers.
 pub(super) fn fletcher32(data: &[u8]) -> u32 {
     let (mut sum1, mut sum2) = (0u32, 0u32);
     let fold = |s: u32| (s & 0xffff) + (s >> 16);
     let even = data.len() & !1;
-    for block in data[..even].chunks(2 * 360) {
-        for w in block.chunks_exact(2) {
-            sum1 += (u32::from(w[0]) << 8) | u32::from(w[1]);
-            sum2 += sum1;
+    for block in data[..even].chunks(2 * FLETCHER_BLOCK) {
+        let lanes = block.len() / (2 * LANE_WORDS) * (2 * LANE_WORDS);
+        let (a, b) = block_sums(&block[..lanes]);
+        let words = (lanes / 2) as u32;
+        sum2 = sum2.wrapping_add(words.wrapping_mul(sum1)).wrapping_add(b);
+        sum1 = sum1.wrapping_add(a);
+        for w in block[lanes..].chunks_exact(2) {
+            sum1 = sum1.wrapping_add((u32::from(w[0]) << 8) | u32::from(w[1]));
+            sum2 = sum2.wrapping_add(sum1);
         }
         sum1 = fold(sum1);
         sum2 = fold(sum2);
     }
     if let Some(&b) = data.get(even) {
-        sum1 += u32::from(b) << 8;
-        sum2 += sum1;
+        sum1 = sum1.wrapping_add(u32::from(b) << 8);
+        sum2 = sum2.wrapping_add(sum1);
         sum1 = fold(sum1);
         sum2 = fold(sum2);
     }
     sum1 = fold(sum1);
     sum2 = fold(sum2);
     (sum2 << 16) | sum1
+}
+
+/// Words per block of [`fletcher32`] between foldings (HDF5's 360).
+const FLETCHER_BLOCK: usize = 360;
+
+/// Lanes of [`block_sums`]: words side by side.
+const LANE_WORDS: usize = 8;
+
+/// `(Σ w_i, Σ (L − i) w_i)` over the `L` big-endian 16-bit words of `bytes` (a
+/// multiple of [`LANE_WORDS`] words, at most [`FLETCHER_BLOCK`]): lane `j` keeps
+/// `a_j`, the sum of its words so far, and `b_j`, the sum of its `a_j` after each
+/// group of [`LANE_WORDS`] words; then `Σ (L − i) w_i = 8 Σ b_j − Σ j a_j`.
+fn block_sums(bytes: &[u8]) -> (u32, u32) {
+    let (mut a, mut b) = ([0u32; LANE_WORDS], [0u32; LANE_WORDS]);
+    for group in bytes.chunks_exact(2 * LANE_WORDS) {
+        for (j, w) in group.chunks_exact(2).enumerate() {
+            a[j] = a[j].wrapping_add((u32::from(w[0]) << 8) | u32::from(w[1]));
+            b[j] = b[j].wrapping_add(a[j]);
+        }
+    }
+    let sum_a = a.iter().fold(0u32, |s, &x| s.wrapping_add(x));
+    let sum_b = b.iter().fold(0u32, |s, &x| s.wrapping_add(x));
+    let weighted = (0..LANE_WORDS as u32)
+        .zip(a)
+        .fold(0u32, |s, (j, x)| s.wrapping_add(j.wrapping_mul(x)));
+    (
+        sum_a,
+        (LANE_WORDS as u32)
+            .wrapping_mul(sum_b)
+            .wrapping_sub(weighted),
+    )
 }
 
 /// Whether deflate is worth running on a byte plane: its byte entropy, estimated on
@@ -266,6 +307,46 @@ fn deflate_run(deflate: &mut Deflate, data: &[u8], out: &mut Vec<u8>) {
 mod tests {
     use super::*;
     use zlib_rs::InflateConfig;
+
+    /// Fletcher-32 word by word, as `H5_checksum_fletcher32` computes it.
+    fn fletcher32_words(data: &[u8]) -> u32 {
+        let (mut sum1, mut sum2) = (0u32, 0u32);
+        let fold = |s: u32| (s & 0xffff) + (s >> 16);
+        let even = data.len() & !1;
+        for block in data[..even].chunks(2 * 360) {
+            for w in block.chunks_exact(2) {
+                sum1 = sum1.wrapping_add((u32::from(w[0]) << 8) | u32::from(w[1]));
+                sum2 = sum2.wrapping_add(sum1);
+            }
+            (sum1, sum2) = (fold(sum1), fold(sum2));
+        }
+        if let Some(&b) = data.get(even) {
+            sum1 = sum1.wrapping_add(u32::from(b) << 8);
+            sum2 = sum2.wrapping_add(sum1);
+            (sum1, sum2) = (fold(sum1), fold(sum2));
+        }
+        (fold(sum2) << 16) | fold(sum1)
+    }
+
+    #[test]
+    fn fletcher32_equals_the_word_by_word_sums() {
+        let mut x = 0x9e37_79b9_u32;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as u8
+        };
+        let random: Vec<u8> = (0..4000).map(|_| next()).collect();
+        // All ones: the largest sums, where the 32-bit sums wrap.
+        let ones = vec![0xff_u8; 4000];
+        for data in [&random, &ones] {
+            for len in (0..40).chain([719, 720, 721, 735, 736, 737, 1440, 1441, 3999, 4000]) {
+                let d = &data[..len];
+                assert_eq!(fletcher32(d), fletcher32_words(d), "length {len}");
+            }
+        }
+    }
 
     /// Inflates a zlib stream of `len` bytes (checking its Adler-32) and unshuffles it.
     fn decode(chunk: &[u8], storage: Storage, n: usize) -> Vec<f64> {

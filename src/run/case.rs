@@ -419,13 +419,19 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
     ) else {
         return Ok(());
     };
-    let (mut e_max, mut at) = (0.0f64, 0);
+    // The largest |e| of the run: the sample with the largest squared radius, whose
+    // radius alone is then taken.
+    let (mut r2_max, mut at) = (0.0f64, 0);
     for (k, (x, y)) in ex.iter().zip(ey).enumerate() {
-        let e = x.hypot(*y);
-        if e > e_max {
-            (e_max, at) = (e, k);
+        let r2 = x * x + y * y;
+        if r2 > r2_max {
+            (r2_max, at) = (r2, k);
         }
     }
+    let e_max = match (ex.get(at), ey.get(at)) {
+        (Some(x), Some(y)) => x.hypot(*y),
+        _ => 0.0,
+    };
     let f_max = f.iter().copied().fold(0.0f64, f64::max);
     let t = out.times.get(at).copied().unwrap_or(f64::NAN);
     if params.joint.is_plain() {
