@@ -5,7 +5,9 @@
 //! (`x` the window's scaled analytic bins). The kurtogram's bands are unions of the
 //! elementary blocks between their edges, so the products `x_{k+d} x*_k` are summed
 //! once per block and lag, and a band's `R_d` is the sum of its blocks that lie wholly
-//! below `end − d`, plus the products of the few bins left above the last of them. Every
+//! below `end − d`, plus the products of the few bins left above the last of them. That
+//! remainder depends only on `end` and `d` (it starts at the last edge at most
+//! `end − d`), so it is summed once per band end and lag for the bands that end there. Every
 //! product a band's lag sums is one of its own bins: nothing is added and taken away
 //! again, so each lag has the rounding of a direct sum. For `c` lags over `n/2` bins the
 //! table costs about `c n/2` complex multiply-adds, once per window, where a transform
@@ -18,22 +20,34 @@ use realfft::num_complex::Complex;
 pub struct LagTable {
     /// The block edges (bin indices, increasing): block `j` is `edges[j]..edges[j+1]`.
     edges: Vec<usize>,
+    /// Whether edge `j` ends a band.
+    ends: Vec<bool>,
     /// `sums[d * blocks + j] = Σ_{k in block j, k+d < len} x_{k+d} x*_k`.
     sums: Vec<Complex<f64>>,
+    /// `tails[d * edges + j] = Σ_{k=e}^{end−1−d} x_{k+d} x*_k` for the edge
+    /// `end = edges[j]` that ends a band and `e` the last edge `≤ end − d` (zero
+    /// elsewhere).
+    tails: Vec<Complex<f64>>,
     /// Lags tabulated, `d = 0..lags`.
     lags: usize,
 }
 
 impl LagTable {
-    /// A table over the blocks between `edges` (every band's first bin and end, in any
-    /// order, duplicates allowed).
-    pub fn new(edges: impl IntoIterator<Item = usize>) -> Self {
-        let mut edges: Vec<usize> = edges.into_iter().collect();
+    /// A table over the blocks between the edges of `bands` (each band's first bin and
+    /// end, `k0..end`, in any order, duplicates allowed).
+    pub fn new(bands: impl IntoIterator<Item = (usize, usize)>) -> Self {
+        let bands: Vec<(usize, usize)> = bands.into_iter().collect();
+        let mut edges: Vec<usize> = bands.iter().flat_map(|&(k0, end)| [k0, end]).collect();
         edges.sort_unstable();
         edges.dedup();
+        let ends = (edges.iter())
+            .map(|e| bands.iter().any(|&(_, end)| end == *e))
+            .collect();
         Self {
             edges,
+            ends,
             sums: Vec::new(),
+            tails: Vec::new(),
             lags: 0,
         }
     }
@@ -52,23 +66,39 @@ impl LagTable {
             }
         }
         debug_assert_eq!(self.sums.len(), lags * blocks);
+        self.tails.clear();
+        for d in 0..lags {
+            for (&end, &is_end) in self.edges.iter().zip(&self.ends) {
+                let stop = end.saturating_sub(d);
+                let tail = match self.edges.first() {
+                    Some(&first) if is_end && stop > first => {
+                        let rest = self.edges[self.edges.partition_point(|&e| e <= stop) - 1];
+                        lag_product(&x[rest + d..stop + d], &x[rest..stop])
+                    }
+                    _ => Complex::default(),
+                };
+                self.tails.push(tail);
+            }
+        }
     }
 
     /// Fills `out` (`out.len() ≤` the lags filled, `≤ end − k0`) with the lags `R_d` of
-    /// the band of bins `k0..end` (both block edges) of `x`, the bins the table was
+    /// the band of bins `k0..end` (one of the table's bands) of the bins the table was
     /// filled from.
-    pub fn band_lags(&self, x: &[Complex<f64>], k0: usize, end: usize, out: &mut [Complex<f64>]) {
-        let blocks = self.edges.len() - 1;
+    pub fn band_lags(&self, k0: usize, end: usize, out: &mut [Complex<f64>]) {
+        let edges = self.edges.len();
+        let blocks = edges - 1;
         let first = self.edges.partition_point(|&e| e < k0);
+        let last_edge = first + self.edges[first..].partition_point(|&e| e < end);
         debug_assert_eq!(self.edges[first], k0);
+        debug_assert!(self.ends[last_edge] && self.edges[last_edge] == end);
         for (d, r) in out.iter_mut().enumerate() {
             let stop = end - d;
             let last = first + self.edges[first..].partition_point(|&e| e <= stop) - 1;
             let whole: Complex<f64> = self.sums[d * blocks + first..d * blocks + last]
                 .iter()
                 .sum();
-            let rest = self.edges[last];
-            *r = whole + lag_product(&x[rest + d..stop + d], &x[rest..stop]);
+            *r = whole + self.tails[d * edges + last_edge];
         }
     }
 }
@@ -120,12 +150,12 @@ mod tests {
             (66, 101),
             (40, 41),
         ];
-        let mut table = LagTable::new(bands.iter().flat_map(|&(a, b)| [a, b]));
+        let mut table = LagTable::new(bands);
         table.fill(&x, 30);
         for (k0, end) in bands {
             let count = 30.min(end - k0);
             let mut out = vec![Complex::default(); count];
-            table.band_lags(&x, k0, end, &mut out);
+            table.band_lags(k0, end, &mut out);
             for (d, r) in out.iter().enumerate() {
                 let want = direct(&x, k0, end, d);
                 let scale: f64 = (k0..end - d).map(|k| (x[k + d] * x[k].conj()).norm()).sum();

@@ -170,11 +170,13 @@ pub struct EnvelopePlan {
     freqs: Vec<f64>,
     forward: Arc<dyn RealToComplex<f64>>,
     inverse: Arc<dyn Fft<f64>>,
-    /// Plans of the kurtogram's short autocorrelation FFTs (cached by length).
+    /// Plans of the band transforms of a band outside the kurtogram's (cached by length).
     planner: FftPlanner<f64>,
     hann: SpectrumPlan,
     /// The kurtogram's bands for this `n`.
     bands: Vec<(f64, Band)>,
+    /// Each kurtogram band's bins and kurtosis transform (`None` for a band with no bin).
+    transforms: Vec<Option<BandTransform>>,
     /// Periodic Hann weights of one STFT segment.
     segment_weights: Vec<f64>,
     /// The FFT of one STFT segment at its own length, its input, output and scratch.
@@ -190,7 +192,8 @@ pub struct EnvelopePlan {
     complex_scratch: Vec<Complex<f64>>,
     /// A band's bins, then their transform or autocorrelation.
     lags: Vec<Complex<f64>>,
-    /// The window's bins `Z_k / 2` and their lag table, for `band: auto`.
+    /// The window's bins `Z_k / 2` (DC and Nyquist `Y_k / 2`), which every band's
+    /// kurtosis and lags start from, and their lag table for `band: auto`.
     scaled: Vec<Complex<f64>>,
     table: LagTable,
     squared: Vec<f64>,
@@ -211,6 +214,7 @@ impl EnvelopePlan {
         let forward = RealFftPlanner::<f64>::new().plan_fft_forward(n);
         let mut planner = FftPlanner::<f64>::new();
         let inverse = planner.plan_fft_inverse(n);
+        let mut scratch = inverse.get_inplace_scratch_len();
         let segment = stft_segment(n);
         let segment_forward = RealFftPlanner::<f64>::new().plan_fft_forward(segment);
         let freqs = frequencies(n, sample_rate);
@@ -218,12 +222,21 @@ impl EnvelopePlan {
         let table = LagTable::new(
             (bands.iter())
                 .filter_map(|&(_, band)| bins_of(&freqs, band))
-                .flat_map(|(k0, bins)| [k0, k0 + bins]),
+                .map(|(k0, bins)| (k0, k0 + bins)),
         );
+        let transforms: Vec<Option<BandTransform>> = (bands.iter())
+            .map(|&(_, band)| {
+                let (k0, bins) = bins_of(&freqs, band)?;
+                let fft = planner.plan_fft_forward(kurtosis_length(bins));
+                scratch = scratch.max(fft.get_inplace_scratch_len());
+                Some(BandTransform { k0, bins, fft })
+            })
+            .collect();
         Ok(Self {
             sample_rate,
             freqs,
             bands,
+            transforms,
             segment_weights: Window::Hann.weights(segment),
             segment_real: segment_forward.make_input_vec(),
             segment_spectrum: segment_forward.make_output_vec(),
@@ -234,7 +247,7 @@ impl EnvelopePlan {
             spectrum: forward.make_output_vec(),
             real_scratch: forward.make_scratch_vec(),
             analytic: vec![Complex::default(); n],
-            complex_scratch: vec![Complex::default(); inverse.get_inplace_scratch_len()],
+            complex_scratch: vec![Complex::default(); scratch],
             lags: Vec::new(),
             scaled: Vec::new(),
             table,
@@ -318,7 +331,12 @@ impl EnvelopePlan {
         self.real.copy_from_slice(&self.centred);
         self.forward
             .process_with_scratch(&mut self.real, &mut self.spectrum, &mut self.real_scratch)
-            .map_err(|e| SpectrumError::Fft(e.to_string()))
+            .map_err(|e| SpectrumError::Fft(e.to_string()))?;
+        self.scaled.clear();
+        self.scaled.extend(
+            (self.spectrum.iter().enumerate()).map(|(k, &y)| 0.5 * analytic_weight(k, n) * y),
+        );
+        Ok(())
     }
 
     /// Fills `analytic` with `z_j = (1/n) Σ_{k in band} Z_k e^{2πi jk/n}`, `Z_k = 2 Y_k`
@@ -340,22 +358,28 @@ impl EnvelopePlan {
     }
 
     /// `<|z|⁴>/<|z|²>² − 2` of the analytic signal in `band` (NaN when the band holds
-    /// no bin or no power), from the band's bins alone (docs/model.md §7.6): the `B`
-    /// bins `Z_{k0+b}`, zero-padded to a length `L ≥ 2B − 1` ([`kurtosis_length`]),
-    /// transformed, `w_m = Σ_b Z_{k0+b} e^{−2πi mb/L}`, give the band's complex
-    /// envelope at `L` points of the window, shifted to baseband and without aliasing
-    /// of `|z|²` (whose DFT `R_d` spans lags `|d| ≤ B − 1`), so Parseval makes
-    /// `L Σ_m |w_m|⁴ / (Σ_m |w_m|²)² = n Σ_j |z_j|⁴ / (Σ_j |z_j|²)²`. The whole band of
-    /// an even `n`, `B = n/2 + 1`, takes `L = n`: there `w` is `z` itself.
+    /// no bin or no power), from the band's bins alone ([`EnvelopePlan::bins_kurtosis`]).
     fn band_kurtosis(&mut self, band: Band) -> f64 {
         let Some((k0, bins)) = self.band_bins(band) else {
             return f64::NAN;
         };
-        let len = kurtosis_length(bins, self.centred.len());
+        let fft = self.planner.plan_fft_forward(kurtosis_length(bins));
+        self.fit_scratch(fft.get_inplace_scratch_len());
+        self.bins_kurtosis(k0, bins, &*fft)
+    }
+
+    /// `<|z|⁴>/<|z|²>² − 2` of the analytic signal of the `bins` bins from `k0` (NaN
+    /// with no power; docs/model.md §7.6): the `B` bins `Z_{k0+b}`, zero-padded to the
+    /// length `L ≥ 2B − 1` of `fft` ([`kurtosis_length`]), transformed,
+    /// `w_m = Σ_b Z_{k0+b} e^{−2πi mb/L}`, give the band's complex envelope at `L`
+    /// points of the window, shifted to baseband and without aliasing of `|z|²` (whose
+    /// DFT `R_d` spans lags `|d| ≤ B − 1`), so Parseval makes
+    /// `L Σ_m |w_m|⁴ / (Σ_m |w_m|²)² = n Σ_j |z_j|⁴ / (Σ_j |z_j|²)²`. The complex
+    /// scratch must hold `fft`'s.
+    fn bins_kurtosis(&mut self, k0: usize, bins: usize, fft: &dyn Fft<f64>) -> f64 {
+        let len = fft.len();
         self.load_bins(k0, bins, len);
-        let forward = self.planner.plan_fft_forward(len);
-        self.fit_scratch(forward.get_inplace_scratch_len());
-        forward.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
+        fft.process_with_scratch(&mut self.lags, &mut self.complex_scratch);
         let (s2, s4) = self.lags.iter().fold((0.0, 0.0), |(s2, s4), w| {
             let p = w.norm_sqr();
             (s2 + p, s4 + p * p)
@@ -376,10 +400,8 @@ impl EnvelopePlan {
     /// Nyquist count half; the common factor 2 cancels in every ratio), zero-padded
     /// to `len`.
     fn load_bins(&mut self, k0: usize, bins: usize, len: usize) {
-        let n = self.centred.len();
         self.lags.clear();
-        self.lags
-            .extend((k0..k0 + bins).map(|k| 0.5 * analytic_weight(k, n) * self.spectrum[k]));
+        self.lags.extend_from_slice(&self.scaled[k0..k0 + bins]);
         self.lags.resize(len, Complex::default());
     }
 
@@ -397,7 +419,7 @@ impl EnvelopePlan {
     /// of the DFT of `|z_j|²`, the squared envelope in the band (§7.6).
     fn band_lags(&mut self, band: Band) -> Option<usize> {
         let (k0, bins) = self.band_bins(band)?;
-        let len = kurtosis_length(bins, usize::MAX);
+        let len = kurtosis_length(bins);
         self.load_bins(k0, bins, len);
         let forward = self.planner.plan_fft_forward(len);
         let inverse = self.planner.plan_fft_inverse(len);
@@ -425,11 +447,6 @@ impl EnvelopePlan {
         let usable = usable_bandwidth(&self.spectrum, 0.5 * self.sample_rate);
         let df = self.sample_rate / self.centred.len() as f64;
         if table {
-            let n = self.centred.len();
-            self.scaled.clear();
-            self.scaled.extend(
-                (self.spectrum.iter().enumerate()).map(|(k, &y)| 0.5 * analytic_weight(k, n) * y),
-            );
             self.table
                 .fill(&self.scaled, lags_needed(usize::MAX, df, lines));
         }
@@ -469,8 +486,7 @@ impl EnvelopePlan {
         }
         let (k0, bins) = self.band_bins(band)?;
         self.lags.resize(count(bins), Complex::default());
-        self.table
-            .band_lags(&self.scaled, k0, k0 + bins, &mut self.lags);
+        self.table.band_lags(k0, k0 + bins, &mut self.lags);
         Some(bins)
     }
 
@@ -486,7 +502,11 @@ impl EnvelopePlan {
             if !allowed(band) {
                 continue;
             }
-            let kurtosis = self.band_kurtosis(band);
+            let Some(t) = &self.transforms[i] else {
+                continue;
+            };
+            let (k0, bins, fft) = (t.k0, t.bins, Arc::clone(&t.fft));
+            let kurtosis = self.bins_kurtosis(k0, bins, &*fft);
             if kurtosis > best.kurtosis || (best.kurtosis.is_nan() && kurtosis.is_finite()) {
                 best = KurtogramChoice {
                     band,
@@ -603,26 +623,32 @@ fn bins_of(freqs: &[f64], band: Band) -> Option<(usize, usize)> {
 /// lines at many bins): the table's cost grows with the lags, the FFTs' does not.
 const LAG_TABLE_MAX: usize = 80;
 
-/// The transform length for a band of `bins` analytic bins of an `n`-sample window:
-/// the smallest `2^a 3^b 5^c ≥ 2 bins − 1` (no aliasing of the squared envelope's
-/// lags), or `n` when that is not shorter.
-fn kurtosis_length(bins: usize, n: usize) -> usize {
+/// The transform length for a band of `bins` analytic bins: the smallest `2^a 3^b ≥
+/// 2 bins − 1` (no aliasing of the squared envelope's lags; the FFT's radix-2, -3,
+/// -4, -6 and -12 passes are its fastest).
+fn kurtosis_length(bins: usize) -> usize {
     let min = (2 * bins).saturating_sub(1).max(1);
     let mut best = min.next_power_of_two();
-    let mut p5 = 1;
-    while p5 < best {
-        let mut p35 = p5;
-        while p35 < best {
-            let mut len = p35;
-            while len < min {
-                len *= 2;
-            }
-            best = best.min(len);
-            p35 *= 3;
+    let mut p3 = 1;
+    while p3 < best {
+        let mut len = p3;
+        while len < min {
+            len *= 2;
         }
-        p5 *= 5;
+        best = best.min(len);
+        p3 *= 3;
     }
-    best.min(n)
+    best
+}
+
+/// A kurtogram band's bins and the transform of its kurtosis.
+struct BandTransform {
+    /// First bin.
+    k0: usize,
+    /// Number of bins.
+    bins: usize,
+    /// The forward FFT of [`kurtosis_length`] of them.
+    fft: Arc<dyn Fft<f64>>,
 }
 
 #[cfg(test)]

@@ -158,8 +158,7 @@ fn kurtogram_finds_the_resonance_of_an_impulse_train() {
 #[test]
 fn band_kurtosis_from_the_bins_equals_the_analytic_signal_s() {
     // The lag form of docs/model.md §7.6 against the moments of z itself, for
-    // even and odd n, narrow bands, a band at DC and the whole band (whose lag
-    // n/2 meets its mirror for even n).
+    // even and odd n, narrow bands, a band at DC and the whole band.
     for n in [500, 501, 1024] {
         let x: Vec<f64> = gaussian(n, 9)
             .iter()
@@ -276,23 +275,24 @@ fn auto_chooses_the_same_band_from_the_lag_table_and_from_per_band_ffts() {
 #[test]
 fn kurtosis_lengths_hold_the_squared_envelope_without_aliasing() {
     let smooth = |mut m: usize| {
-        for p in [2, 3, 5] {
+        for p in [2, 3] {
             while m.is_multiple_of(p) {
                 m /= p;
             }
         }
         m == 1
     };
-    for bins in 1..3000 {
-        let len = kurtosis_length(bins, usize::MAX);
+    for bins in 1..6000 {
+        let len = kurtosis_length(bins);
         assert!(len + 1 >= 2 * bins, "{bins} bins: {len}");
-        assert!(smooth(len), "{bins} bins: {len} is not 5-smooth");
-        // No shorter 5-smooth length will do.
+        assert!(smooth(len), "{bins} bins: {len} is not 3-smooth");
+        // No shorter 3-smooth length will do.
         assert_eq!(
             (2 * bins - 1..len).find(|&l| smooth(l)),
             None,
             "{bins} bins"
         );
     }
-    assert_eq!(kurtosis_length(5001, 10_000), 10_000);
+    // The whole band of the paper window, 5 001 bins: 2^7 3^4, not n = 10 000.
+    assert_eq!(kurtosis_length(5001), 10_368);
 }
