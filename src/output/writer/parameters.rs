@@ -27,11 +27,7 @@ impl Unfilled {
 
     /// The parameter `index` of `layout` (a reference parameter when `reference`), the
     /// number of rows of its dimension, and its position in [`Unfilled::next`].
-    fn find<'l>(
-        layout: &'l Layout,
-        reference: bool,
-        index: usize,
-    ) -> Option<(&'l Param, usize, usize)> {
+    fn find(layout: &Layout, reference: bool, index: usize) -> Option<(&Param, usize, usize)> {
         if reference {
             let p = layout.reference_parameters.get(index)?;
             Some((p, layout.n_references(), layout.parameters.len() + index))
