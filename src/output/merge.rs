@@ -492,7 +492,7 @@ impl Merged<'_> {
             let refs = b * n_refs / blocks..(b + 1) * n_refs / blocks;
             self.copy_block(&mut writer, (cases, refs), &partial)?;
             // The block's metric rows go into the file as consecutive runs.
-            writer.flush().map_err(OutputError::file(&partial))?;
+            (writer.write_held_metrics()).map_err(OutputError::file(&partial))?;
         }
         writer.finish().map_err(to_partial)?;
         super::rename_durably(&partial, output).map_err(OutputError::io(

@@ -444,6 +444,13 @@ impl StudyWriter {
         Ok(())
     }
 
+    /// Writes the metric rows held now, in runs of consecutive rows; the statuses and
+    /// messages wait for the next flush (a text variable rewritten takes new space in
+    /// the file each time).
+    pub(in crate::output) fn write_held_metrics(&mut self) -> Result<(), StudyFileError> {
+        self.scalars.write_metrics()
+    }
+
     /// Writes the per-case scalars and flushes everything written so far to disk.
     pub fn flush(&mut self) -> Result<(), StudyFileError> {
         self.scalars.write()?;

@@ -200,7 +200,7 @@ impl Scalars {
     }
 
     /// Writes the metric rows held, one run of consecutive rows at a time.
-    fn write_metrics(&mut self) -> Result<(), StudyFileError> {
+    pub(super) fn write_metrics(&mut self) -> Result<(), StudyFileError> {
         let pending = std::mem::take(&mut self.pending);
         self.pending_values = 0;
         let mut run: Vec<(usize, Vec<f64>)> = Vec::new();
