@@ -455,6 +455,13 @@ impl Layout {
 
     /// Checks the layout; the error says what is wrong and names the variable.
     pub fn validate(&self) -> Result<(), String> {
+        self.validate_as(false)
+    }
+
+    /// [`Layout::validate`], or when `unfilled` the layout of a file whose
+    /// parameters are written later ([`StudyWriter::create_unfilled`](super::StudyWriter::create_unfilled)):
+    /// then every parameter holds no value.
+    pub(super) fn validate_as(&self, unfilled: bool) -> Result<(), String> {
         let n_case = self.case_ids.len();
         let n_ref = self.reference_ids.len();
         distinct(CASE, &self.case_ids)?;
@@ -516,20 +523,21 @@ impl Layout {
                 "`{REFERENCE_INDEX}` holds row {bad}, but there are {n_ref} references"
             ));
         }
-        self.check_parameters()?;
+        self.check_parameters(unfilled)?;
         self.check_names()?;
         self.check_attributes()
     }
 
-    /// Every parameter has one value per case (reference parameters per reference),
-    /// no text one a NUL.
-    fn check_parameters(&self) -> Result<(), String> {
+    /// Every parameter has one value per case (reference parameters per reference;
+    /// none when `unfilled`), no text one a NUL.
+    fn check_parameters(&self, unfilled: bool) -> Result<(), String> {
+        let rows = |n: usize| if unfilled { 0 } else { n };
         for (params, dim, len) in [
-            (&self.parameters, CASE, self.case_ids.len()),
+            (&self.parameters, CASE, rows(self.case_ids.len())),
             (
                 &self.reference_parameters,
                 REFERENCE,
-                self.reference_ids.len(),
+                rows(self.reference_ids.len()),
             ),
         ] {
             for p in params {

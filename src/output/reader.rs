@@ -177,7 +177,8 @@ impl StudyReader {
             }
             Ok(_) => {}
         }
-        // The metadata cache bounded as the writer's: `merge` holds every shard open.
+        // The metadata cache bounded as the writer's: an open file's memory does not
+        // grow with the chunks read.
         let opened = File::with_options()
             .with_fapl(|p| p.mdc_config(&super::writer::bounded_metadata_cache()))
             .open(&path);

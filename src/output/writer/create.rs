@@ -30,6 +30,8 @@ pub(super) struct Creator<'a> {
     pub(super) path: &'a Path,
     pub(super) file: &'a File,
     pub(super) layout: &'a Layout,
+    /// Whether the parameters are left unwritten ([`StudyWriter::create_unfilled`]).
+    pub(super) unfilled: bool,
 }
 
 /// The coordinate variables: name, units, long name. Their order is their netCDF
@@ -302,14 +304,32 @@ impl Creator<'_> {
         Ok(ds)
     }
 
-    /// A `[dim]` parameter with its values.
+    /// A `[dim]` parameter with its values (unwritten, one row per `dim` value, when
+    /// the file is made unfilled).
     pub(super) fn parameter(
         &self,
         p: &Param,
         role: Role,
         dim: &Dataset,
     ) -> Result<(), StudyFileError> {
+        let name = p.spec.name.as_str();
+        let rows = [dim.size()];
         let ds = match &p.values {
+            ParamValues::F64(_) if self.unfilled => {
+                let builder = self.file.new_dataset::<f64>().chunk(whole_chunks(&rows));
+                builder
+                    .fletcher32()
+                    .shape(rows)
+                    .create(name)
+                    .at(self.path, name)?
+            }
+            ParamValues::Str(_) if self.unfilled => {
+                let builder = self.file.new_dataset::<VarLenUnicode>().shape(rows);
+                let ds = builder.create(name).at(self.path, name)?;
+                // Continued as the blocks are written (`writer::parameters`).
+                text::write_digest::<&str>(&ds, text::DIGEST_ATTR, &[]).at(self.path, name)?;
+                ds
+            }
             ParamValues::F64(v) => self.with_data(&p.spec.name, v)?,
             ParamValues::Str(v) => {
                 let strings = v

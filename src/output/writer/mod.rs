@@ -24,11 +24,14 @@ use super::reserve::Reservation;
 use super::text;
 
 mod create;
+mod parameters;
 mod scalars;
 
 pub(super) use create::bounded_metadata_cache;
 use create::*;
+use parameters::Unfilled;
 use scalars::Scalars;
+pub(super) use scalars::WINDOW_VALUES;
 
 /// One finished (or failed) case, borrowed from the caller.
 ///
@@ -140,6 +143,9 @@ pub struct StudyWriter {
     scalars: Scalars,
     /// Disk blocks reserved for the chunks [`StudyWriter::write_encoded`] appends.
     reservation: Reservation,
+    /// The parameter rows written so far of a file made by
+    /// [`StudyWriter::create_unfilled`]; none for any other.
+    unfilled: Option<Unfilled>,
 }
 
 /// Upper bound of HDF5's metadata cache for a written file (bytes, as HDF5 counts
@@ -169,11 +175,30 @@ impl StudyWriter {
     /// dimension scale and attribute, and the values known now (coordinates,
     /// parameters, `reference_index`).
     pub fn create(path: impl AsRef<Path>, layout: &Layout) -> Result<Self, StudyFileError> {
-        let path = path.as_ref().to_owned();
-        layout.validate().map_err(|reason| StudyFileError::Layout {
-            path: path.clone(),
-            reason,
-        })?;
+        Self::create_as(path.as_ref(), layout, false)
+    }
+
+    /// Creates the study file at `path` like [`StudyWriter::create`], except that
+    /// the parameter and reference parameter variables are left unwritten: the
+    /// parameters of `layout` hold no values (their kind is the variable's type), and
+    /// [`StudyWriter::write_parameter_rows`] writes them a block of rows at a time,
+    /// so that a caller with many cases never holds them whole.
+    pub fn create_unfilled(
+        path: impl AsRef<Path>,
+        layout: &Layout,
+    ) -> Result<Self, StudyFileError> {
+        Self::create_as(path.as_ref(), layout, true)
+    }
+
+    /// [`StudyWriter::create`], or [`StudyWriter::create_unfilled`] when `unfilled`.
+    fn create_as(path: &Path, layout: &Layout, unfilled: bool) -> Result<Self, StudyFileError> {
+        let path = path.to_owned();
+        layout
+            .validate_as(unfilled)
+            .map_err(|reason| StudyFileError::Layout {
+                path: path.clone(),
+                reason,
+            })?;
         let file = File::with_options()
             .with_fapl(file_access)
             .with_fcpl(|p| {
@@ -186,11 +211,35 @@ impl StudyWriter {
             path: &path,
             file: &file,
             layout,
+            unfilled,
         }
         .build()?;
         file.flush().at(&path, "/")?;
         let rows = RowDatasets::open(&file, layout, &path)?;
-        Self::from_parts(path, file, layout.clone(), rows)
+        let mut writer = Self::from_parts(path, file, layout.clone(), rows)?;
+        writer.unfilled = unfilled.then(|| Unfilled::new(layout));
+        Ok(writer)
+    }
+
+    /// Writes `values` into the next rows of parameter `index` of
+    /// [`Layout::parameters`] (of [`Layout::reference_parameters`] when `reference`)
+    /// of a file made by [`StudyWriter::create_unfilled`]: each parameter's blocks
+    /// follow one another from row 0, and [`StudyWriter::finish`] refuses a file with
+    /// a row of a parameter not written.
+    pub fn write_parameter_rows(
+        &mut self,
+        reference: bool,
+        index: usize,
+        values: &ParamValues,
+    ) -> Result<(), StudyFileError> {
+        let Some(unfilled) = &mut self.unfilled else {
+            return Err(self.record_error(
+                "parameters",
+                "the file was made with its parameters written".to_owned(),
+            ));
+        };
+        let file = (&self.file, self.path.as_path(), &self.layout);
+        unfilled.write(file, reference, index, values)
     }
 
     /// Opens an existing study file to write more rows into it (to resume a study).
@@ -248,6 +297,7 @@ impl StudyWriter {
             rows,
             chunk: Vec::new(),
             scalars,
+            unfilled: None,
         })
     }
 
@@ -394,6 +444,13 @@ impl StudyWriter {
         Ok(())
     }
 
+    /// Writes the metric rows held now, in runs of consecutive rows; the statuses and
+    /// messages wait for the next flush (a text variable rewritten takes new space in
+    /// the file each time).
+    pub(in crate::output) fn write_held_metrics(&mut self) -> Result<(), StudyFileError> {
+        self.scalars.write_metrics()
+    }
+
     /// Writes the per-case scalars and flushes everything written so far to disk.
     pub fn flush(&mut self) -> Result<(), StudyFileError> {
         self.scalars.write()?;
@@ -403,6 +460,9 @@ impl StudyWriter {
     /// Flushes and closes the file, reporting errors that dropping would hide, then
     /// releases the disk blocks reserved past its end.
     pub fn finish(mut self) -> Result<(), StudyFileError> {
+        if let Some(unfilled) = &self.unfilled {
+            unfilled.check_complete(&self.layout, &self.path)?;
+        }
         self.flush()?;
         let Self {
             path,

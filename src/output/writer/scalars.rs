@@ -24,7 +24,7 @@ use super::super::text;
 use super::Record;
 
 /// Metric values held before they are written (8 bytes each: 8 MiB).
-const WINDOW_VALUES: usize = 1 << 20;
+pub(in crate::output) const WINDOW_VALUES: usize = 1 << 20;
 
 /// Strings written (and digested) per block when a message variable is written.
 const STRING_BLOCK: usize = 1 << 16;
@@ -200,7 +200,7 @@ impl Scalars {
     }
 
     /// Writes the metric rows held, one run of consecutive rows at a time.
-    fn write_metrics(&mut self) -> Result<(), StudyFileError> {
+    pub(super) fn write_metrics(&mut self) -> Result<(), StudyFileError> {
         let pending = std::mem::take(&mut self.pending);
         self.pending_values = 0;
         let mut run: Vec<(usize, Vec<f64>)> = Vec::new();
