@@ -107,9 +107,9 @@ fn positions(want: &[VarSpec], have: &[VarSpec]) -> Vec<usize> {
 /// is the first shard's with the merge's line on top. Returns the number of cases.
 ///
 /// One shard is open at a time, and the merged file is written a block of case rows
-/// at a time (as many rows as fill the writer's 8 MiB window of metric values), its parameters included: what is held for the
-/// whole merge is each case's and reference's place and id (about 110 bytes per
-/// case), not their values.
+/// at a time (as many rows as fill the writer's 8 MiB window of metric values), its
+/// parameters included: what is held for the whole merge is each case's and
+/// reference's place and id (about 110 bytes per case), not their values.
 pub fn merge(output: &Path, shards: &[PathBuf], force: bool) -> Result<usize, OutputError> {
     merge_in_blocks(output, shards, force, block_rows)
 }
