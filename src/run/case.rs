@@ -419,19 +419,7 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
     ) else {
         return Ok(());
     };
-    // The largest |e| of the run: the sample with the largest squared radius, whose
-    // radius alone is then taken.
-    let (mut r2_max, mut at) = (0.0f64, 0);
-    for (k, (x, y)) in ex.iter().zip(ey).enumerate() {
-        let r2 = x * x + y * y;
-        if r2 > r2_max {
-            (r2_max, at) = (r2, k);
-        }
-    }
-    let e_max = match (ex.get(at), ey.get(at)) {
-        (Some(x), Some(y)) => x.hypot(*y),
-        _ => 0.0,
-    };
+    let (e_max, at) = largest_radius(ex, ey);
     let f_max = f.iter().copied().fold(0.0f64, f64::max);
     let t = out.times.get(at).copied().unwrap_or(f64::NAN);
     if params.joint.is_plain() {
@@ -489,6 +477,23 @@ pub fn check_eccentricity(params: &CaseParams, out: &CaseOutput) -> Result<(), S
         ));
     }
     Ok(())
+}
+
+/// The largest radius `|(x, y)|` over the samples of `xs`, `ys` (0 for none) and the
+/// sample where it is: the sample of the largest squared radius, whose radius alone
+/// is then taken.
+fn largest_radius(xs: &[f64], ys: &[f64]) -> (f64, usize) {
+    let (mut r2_max, mut at) = (0.0f64, 0);
+    for (k, (x, y)) in xs.iter().zip(ys).enumerate() {
+        let r2 = x * x + y * y;
+        if r2 > r2_max {
+            (r2_max, at) = (r2, k);
+        }
+    }
+    match (xs.get(at), ys.get(at)) {
+        (Some(x), Some(y)) => (x.hypot(*y), at),
+        _ => (0.0, at),
+    }
 }
 
 /// [`check_eccentricity`] of a plain journal whose eccentricity peaks at `e_max` (m)
