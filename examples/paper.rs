@@ -75,7 +75,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ideal: Vec<CaseOutput> = study
         .references
         .iter()
-        .map(|r| simulate(r, &study.solver, &study.sampling))
+        .map(|r| simulate(&r.params, &study.solver, &study.sampling))
         .collect::<Result<_, _>>()?;
     let mut results: BTreeMap<Key, (VibrationMetrics, CaseOutput)> = BTreeMap::new();
     let mut total_time = 0.0;

@@ -2,10 +2,12 @@
 //! on the expanded study (values, strata, layout, seeds) and on the run's file, and
 //! the refusals of what a design may not contain.
 
+use std::collections::BTreeSet;
 use std::path::Path;
 
 use studyrun::study::design::Method;
 use studyrun::study::params::lookup;
+use studyrun::study::{Case, Limits, Shard};
 use studyrun::Study;
 
 const HEAD: &str = "name: d\nduration: 0.02\nsample_rate: 1000\neffects: [clearance, waviness, damping]\nbearing: {damping: 100}\n";
@@ -295,4 +297,74 @@ fn what_a_design_may_not_contain_is_refused_with_the_rule() {
     .expect_err("damping is off")
     .to_string();
     assert!(off.contains("the damping effect is off"), "{off}");
+}
+
+/// A study whose design draws a distinct speed per row, long enough for whole
+/// revolutions (0.2 s at 1 kHz, `transient: auto`), with `rest` appended.
+fn speeds_design(method: &str, samples: u64, rest: &str) -> String {
+    format!(
+        "name: d\nduration: 0.2\nsample_rate: 1000\neffects: [clearance, waviness, damping]\n\
+         bearing: {{damping: 100}}\ndesign:\n  method: {method}\n  samples: {samples}\n  \
+         seed: 2\n  parameters:\n    rpm: {{min: 300, max: 900}}\n    \
+         clearance: {{min: \"10 um\", max: \"60 um\"}}\n{rest}"
+    )
+}
+
+/// A Saltelli design run as three shards merges into the file of its one run, bit for
+/// bit: each shard numbers its references, revolutions and window as the whole study.
+#[test]
+fn a_design_run_as_three_shards_merges_into_its_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("s.yaml"), speeds_design("saltelli", 4, "")).unwrap();
+    crate::common::studyrun_ok(d, &["s.yaml", "-o", "whole.h5", "-q"]);
+    for k in 1..=3 {
+        let (shard, out) = (format!("{k}/3"), format!("part{k}.h5"));
+        crate::common::studyrun_ok(d, &["s.yaml", "--shard", &shard, "-o", &out, "-q"]);
+    }
+    let merge = ["merge", "merged.h5", "part2.h5", "part3.h5", "part1.h5"];
+    crate::common::studyrun_ok(d, &merge);
+    crate::cli::assert_same_data(&d.join("whole.h5"), &d.join("merged.h5"));
+}
+
+/// A shard's study holds its own cases and their references only, under the whole
+/// study's ids, with every figure of the whole study; a case of another shard is
+/// refused as in the whole study.
+#[test]
+fn a_shard_holds_only_its_own_cases_with_the_whole_studys_figures() {
+    let text = speeds_design("lhs", 30, "");
+    let (path, limits) = (Path::new("grid.yaml"), Limits::default());
+    let whole = Study::from_yaml(&text, path).unwrap();
+    assert_eq!((whole.cases.len(), whole.references.len()), (30, 30));
+    assert!(whole.revolutions > 0);
+    for k in 1..=4 {
+        let part = Shard { k, n: 4 };
+        let s = Study::from_yaml_part(&text, path, &limits, Some(part)).unwrap();
+        let own: Vec<&Case> = whole.cases.iter().filter(|c| c.id % 4 == k - 1).collect();
+        assert_eq!(s.cases.iter().collect::<Vec<_>>(), own, "{part}");
+        let used: BTreeSet<usize> = own.iter().map(|c| c.reference).collect();
+        let held: Vec<usize> = s.references.iter().map(|r| r.id).collect();
+        assert_eq!(held, used.into_iter().collect::<Vec<_>>(), "{part}");
+        for r in &s.references {
+            assert_eq!(&r.params, whole.reference(r.id), "{part}");
+        }
+        assert_eq!(s.whole, whole.whole, "{part}");
+        assert_eq!(s.part, Some(part));
+        let figures = |s: &Study| (s.transient, s.revolutions, s.design.clone(), s.axes.clone());
+        assert_eq!(figures(&s), figures(&whole), "{part}");
+        assert_eq!(s.shard(k, 4), (0..s.cases.len()).collect::<Vec<_>>());
+        let (a, b) = (s.memory_estimate(1), whole.memory_estimate(1));
+        assert!(a.case_table < 0.5 * b.case_table, "{part}: {a:?} {b:?}");
+    }
+    // Case 30, the explicit case after the design's 30 rows, is in shard 3/4 only.
+    let late = speeds_design("lhs", 30, "cases: [{noise_realization: 1}]\n");
+    let refusal = Study::from_yaml(&late, path).unwrap_err();
+    assert!(refusal.to_string().contains("case 30"), "{refusal}");
+    for k in 1..=4 {
+        let part = Some(Shard { k, n: 4 });
+        assert_eq!(
+            Study::from_yaml_part(&late, path, &limits, part).unwrap_err(),
+            refusal
+        );
+    }
 }

@@ -64,8 +64,8 @@ fn the_documented_example_expands_in_file_order_first_axis_slowest() {
     assert!(s
         .cases
         .iter()
-        .all(|c| s.references[c.reference].rpm == c.params.rpm
-            && s.references[c.reference].location == Location::Ideal));
+        .all(|c| s.reference(c.reference).rpm == c.params.rpm
+            && s.reference(c.reference).location == Location::Ideal));
     assert_eq!(s.sampling.len(), 20_001);
     // Deterministic: the same text gives the same cases.
     assert_eq!(study(EXAMPLE).cases, s.cases);

@@ -336,6 +336,7 @@ fn ten_million_cases_are_refused_before_they_are_expanded() {
             "of memory, more than the limit of 4.00 GiB",
             "case table 10000000 cases",
             "fewer cases (10000000 now",
+            "more shards (`--shard K/N` with a larger N",
         ],
     );
     assert!(took < FAST, "took {took:?}");
@@ -363,6 +364,50 @@ fn ten_million_cases_are_refused_before_they_are_expanded() {
         ],
     );
     assert!(took < FAST, "took {took:?}");
+}
+
+/// A study whose case table is too large for the limit is refused with `--shard` as a
+/// way out, and one shard of it, which holds only its own cases, fits the same limit:
+/// `--dry-run --shard` estimates the shard.
+#[test]
+fn a_case_table_too_large_for_one_process_fits_as_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = "name: many\nduration: 0.002\nsample_rate: 5000\ntransient: 0\n\
+                output: {series: none}\nmax_cases: 40000\ndesign: {method: lhs, \
+                samples: 40000, parameters: {rpm: {min: 300, max: 900}}}\n";
+    write(dir.path(), "many.yaml", grid);
+    let out = studyrun(dir.path(), &["validate", "many.yaml", "-j", "1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (_, whole) = printed_estimate(&out);
+    let limit = format!("{}B", (0.9 * whole).round());
+    let args = |shard: &'static str| {
+        let mut a = vec![
+            "many.yaml",
+            "--dry-run",
+            "-j",
+            "1",
+            "--memory-limit",
+            &limit,
+        ];
+        if !shard.is_empty() {
+            a.extend(["--shard", shard]);
+        }
+        a
+    };
+    let out = studyrun(dir.path(), &args(""));
+    refused(
+        &out,
+        2,
+        &[
+            "case table 40000 cases",
+            "fewer cases (40000 now",
+            "`--shard K/N`",
+        ],
+    );
+    let out = studyrun(dir.path(), &args("2/4"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("10000 cases"), "{text}");
 }
 
 #[test]

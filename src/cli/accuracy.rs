@@ -35,7 +35,7 @@ pub(super) fn accuracy_command(
         )
         .exit();
     }
-    let study = load(grid, &limits)?;
+    let study = load(grid, &limits, None)?;
     if study.recordings.is_some() {
         return Err(StudyError {
             path: grid.to_path_buf(),

@@ -393,6 +393,7 @@ fn limits(jobs_requested: Option<u64>, memory_limit: Option<u64>) -> Limits {
     Limits::new(memory_limit, Some(jobs(jobs_requested)))
 }
 
-fn load(grid: &Path, limits: &Limits) -> Result<Study> {
-    Ok(Study::load_with(grid, limits)?)
+/// The study of `grid` under `limits`, holding only the cases of `part` when given.
+fn load(grid: &Path, limits: &Limits, part: Option<Shard>) -> Result<Study> {
+    Ok(Study::load_part(grid, limits, part)?)
 }

@@ -79,7 +79,7 @@ pub(super) fn memory_json(estimate: f64, limits: &Limits) -> serde_json::Value {
 pub(super) fn run_command(args: RunArgs) -> Result<u8> {
     let grid = args.grid.expect("clap requires the grid");
     let limits = limits(args.jobs, args.memory_limit);
-    let study = load(&grid, &limits)?;
+    let study = load(&grid, &limits, args.shard)?;
     let output = args
         .output
         .unwrap_or_else(|| PathBuf::from(format!("{}.h5", study.name)));

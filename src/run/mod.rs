@@ -129,11 +129,18 @@ enum Start {
     Complete(RunSummary),
 }
 
-/// Runs `study` (or a shard of it) into `opts.output`: takes the output's lock,
+/// Runs `study` (or a shard of it) into `opts.output`: refuses a study holding one
+/// shard's cases ([`Study::part`]) run as another part; takes the output's lock,
 /// decides how to start, creates the file (references first), replays an
 /// interrupted run, runs the pending cases on the workers and finishes the file.
 pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
     let start = Instant::now();
+    if let Some(part) = study.part.filter(|&p| Some(p) != opts.shard) {
+        return Err(RunError::refused(format!(
+            "the study holds only the cases of shard {part}; run it as that shard \
+             (`--shard {part}`), or load the whole study"
+        )));
+    }
     let rows: Vec<usize> = match opts.shard {
         Some(s) => study.shard(s.k, s.n),
         None => (0..study.cases.len()).collect(),

@@ -17,7 +17,7 @@ use super::RunError;
 
 /// Runs the ideal reference `index` of `study`.
 pub(super) fn run_reference(study: &Study, index: usize) -> Result<CaseOutput, RunError> {
-    let r: &CaseParams = &study.references[index];
+    let r: &CaseParams = study.reference(index);
     simulate(r, &study.solver, &study.sampling).map_err(|source| RunError::Reference {
         index,
         rpm: r.rpm,
@@ -93,11 +93,13 @@ impl<'a> ReferenceCache<'a> {
     }
 }
 
-/// Every ideal reference of `study`, in index order, run in parallel and all held:
-/// for the accuracy study, which compares each integrator with them.
+/// Every ideal reference `study` holds, in id order, run in parallel and all held:
+/// for the accuracy study, which compares each integrator with them (a whole study,
+/// whose reference `k` is the `k`-th).
 pub(crate) fn run_references(study: &Study) -> Result<Vec<CaseOutput>, RunError> {
-    (0..study.references.len())
-        .into_par_iter()
-        .map(|k| run_reference(study, k))
+    study
+        .references
+        .par_iter()
+        .map(|r| run_reference(study, r.id))
         .collect()
 }

@@ -13,12 +13,13 @@ use super::config::{
 use super::memory::Limits;
 use super::params::{lookup, ParamDef, PARAMETERS};
 use super::units::Dimension;
-use super::{Case, SeriesOutput, Study, StudyError, DEFAULT_MAX_CASES};
+use super::{Case, SeriesOutput, Shard, Study, StudyError, DEFAULT_MAX_CASES};
 use crate::error::number;
 
 mod analysis;
 mod axes;
 mod base;
+mod collect;
 mod ctx;
 mod design;
 mod effects;
@@ -48,11 +49,11 @@ use crate::solve::{
 use analysis::*;
 use axes::*;
 use base::*;
+use collect::Collected;
 use ctx::*;
 use effects::effects;
 pub use effects::Effects;
 use journal::*;
-use references::*;
 use solver::solver;
 
 /// Where each parameter of a case was set: (parameter, YAML field, line/column).
@@ -63,14 +64,20 @@ type Provenance = Vec<(&'static str, String, (u64, u64))>;
 /// expanded and once their speeds are known, the exact estimate at the end). The
 /// steps: parse, sampling, effects and base case, solver, axes, case count, axis
 /// values, memory, expansion, references, analysed window, spectra and output
-/// settings, memory.
-pub(super) fn build(text: &str, path: &Path, limits: &Limits) -> Result<Study, StudyError> {
+/// settings, memory. With a `part`, the study holds only that shard's cases (a study
+/// of recordings holds every case either way).
+pub(super) fn build(
+    text: &str,
+    path: &Path,
+    limits: &Limits,
+    part: Option<Shard>,
+) -> Result<Study, StudyError> {
     let ctx = Ctx { path };
     let file = parse(&ctx, text)?;
     check_name(&ctx, &file.name)?;
     match file.recordings {
         Some(_) => recordings::build_recordings(&ctx, file, text, limits),
-        None => build_simulated(&ctx, file, text, limits),
+        None => build_simulated(&ctx, file, text, limits, part),
     }
 }
 
@@ -80,6 +87,7 @@ fn build_simulated(
     file: GridFile,
     text: &str,
     limits: &Limits,
+    part: Option<Shard>,
 ) -> Result<Study, StudyError> {
     let sampling = sampling_of(ctx, &file)?;
     let effects = effects(ctx, &file)?;
@@ -91,24 +99,23 @@ fn build_simulated(
     let (total, count) = case_count(ctx, &file, &groups, rows)?;
     // Before the design is drawn: its values are rows × parameters.
     let places = memory_check::Places::of(&file);
-    let mut known = known_before_expansion(&file, &sampling, total, rows);
+    let mut known = known_before_expansion(&file, &sampling, total, rows, part);
     memory_check::check_lower_bound(ctx, &places, &known, limits)?;
-    let (mut cases, design) = expand_cases(
+    let (collected, design) = expand_cases(
         ctx,
         &file,
         (&base, &prov),
         &effects,
         (&groups, &axes_names),
-        (total, count),
+        (total, count, part),
     )?;
-    check_joint_keys(ctx, &file, &cases)?;
-    let references = assign_references(&mut cases);
-    let transient = transient_of(ctx, &file, &sampling, &cases)?;
+    check_joint_keys(ctx, &file, collected.joints)?;
+    let transient = transient_of(ctx, &file, &sampling, collected.longest_revolution)?;
     let sensors = match &file.sensors {
         Some(list) => sensors::sensors(ctx, list, &sampling, &effects)?,
         None => Vec::new(),
     };
-    sensors::check_realizations(ctx, &sensors, &cases)?;
+    sensors::check_realizations(ctx, &sensors, collected.realization)?;
     let analysed = Analysed::Simulated(&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(ctx, file.spectra.as_ref(), analysed)?;
     let max_frequency = analysis::max_frequency(ctx, file.spectra.as_ref(), &sampling)?;
@@ -118,10 +125,15 @@ fn build_simulated(
         .map(|e| envelope_settings(ctx, e, &sampling, transient, analysed))
         .transpose()?;
     let (float32, compression) = output_settings(ctx, file.output.as_ref())?;
-    let (replicates, chaos_check) = replicates::resolve(ctx, &file, &cases)?;
-    let revolutions = most_revolutions(&cases, transient, sampling.duration);
+    let (replicates, chaos_check) = replicates::resolve(ctx, &file, &collected.tightest)?;
+    let revolutions = collected.most_revolutions(transient, sampling.duration);
     check_samples_per_revolution(ctx, &file, revolutions, &sampling)?;
-    (known.references, known.revolutions) = (references.len() as u64, revolutions as u64);
+    let orders = order_settings(ctx, &file, &sampling, transient, |first, last| {
+        collected.fewest_whole_revolutions(first, last)
+    })?;
+    let (cases, references, whole) = collected.finish();
+    known.references = references.len() as u64;
+    (known.study_references, known.revolutions) = (whole.references, revolutions as u64);
     memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let mut study = Study {
         name: file.name.value.clone(),
@@ -136,12 +148,14 @@ fn build_simulated(
         spectrum_channels,
         max_frequency,
         envelope,
-        orders: order_settings(ctx, &file, &sampling, transient, &cases)?,
+        orders,
         float32,
         compression,
         axes: axes_names,
         cases,
         references,
+        part,
+        whole,
         design,
         replicates,
         chaos_check,
@@ -172,15 +186,6 @@ fn refuse_recording_keys(ctx: &Ctx<'_>, file: &GridFile) -> Result<(), StudyErro
         )),
         None => Ok(()),
     }
-}
-
-/// The most whole revolutions of any of `cases` between `transient` and `duration` (s).
-fn most_revolutions(cases: &[Case], transient: f64, duration: f64) -> usize {
-    cases
-        .iter()
-        .map(|c| revolution_count(&c.params.drive(), transient, duration))
-        .max()
-        .unwrap_or(0)
 }
 
 /// Adds the `sensors` of the file's `sensors:` list to `study`, their names checked
@@ -218,43 +223,48 @@ fn parse(ctx: &Ctx<'_>, text: &str) -> Result<GridFile, StudyError> {
 }
 
 /// What is known of the study before its cases are expanded: `total` cases of the
-/// samples of `sampling`, a sampled design of `rows` rows, the longest speed table.
+/// samples of `sampling` (those of `part` held), a sampled design of `rows` rows, the
+/// longest speed table.
 fn known_before_expansion(
     file: &GridFile,
     sampling: &Sampling,
     total: u64,
     rows: u64,
+    part: Option<Shard>,
 ) -> memory_check::Known {
     memory_check::Known {
         samples: sampling.len() as u64,
-        cases: total,
+        cases: part.map_or(total, |s| collect::shard_size(total, s)),
+        sharded: part.is_some(),
         design_values: file.design.as_ref().map_or(0, |d| {
             rows.saturating_mul(d.value.parameters.value.len() as u64)
         }),
         references: 0,
+        study_references: 0,
         revolutions: 0,
         speed_knots: memory_check::speed_knots(file),
     }
 }
 
-/// The study's cases: the `count` combinations of the grid's axis `groups` (named
-/// `axes`), then the explicit `cases:`, each with every row of a sampled design,
-/// from the base case (`total` in all); with the design's description.
+/// The study's cases collected ([`Collected`], those of `part` kept): the `count`
+/// combinations of the grid's axis `groups` (named `axes`), then the explicit
+/// `cases:`, each with every row of a sampled design, from the base case (`total` in
+/// all); with the design's description.
 fn expand_cases(
     ctx: &Ctx<'_>,
     file: &GridFile,
     (base, prov): (&CaseParams, &Provenance),
     effects: &Effects,
     (groups, axes): (&[Vec<Axis<'_>>], &[String]),
-    (total, count): (u64, u64),
-) -> Result<(Vec<Case>, Option<super::DesignInfo>), StudyError> {
+    (total, count, part): (u64, u64, Option<Shard>),
+) -> Result<(Collected, Option<super::DesignInfo>), StudyError> {
     let sampled = design::resolve(ctx, file, base, effects, axes)?;
     let mut resolved = resolve_axes(ctx, base, groups, effects)?;
     check_repeats(ctx, &resolved)?;
     if let Some(d) = &sampled {
         resolved.push(d.group());
     }
-    let mut cases = Vec::with_capacity(total as usize);
+    let mut cases = Collected::new(part, total, file.replicates.is_some());
     expand_grid(ctx, base, prov, &resolved, count, effects, &mut cases)?;
     let explicit_design = sampled.as_ref().map(|_| &resolved[resolved.len() - 1]);
     expand_explicit(ctx, file, base, prov, explicit_design, effects, &mut cases)?;

@@ -35,6 +35,11 @@ const FIXED_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
 /// One design value while a study expands: the unit draw and the resolved value
 /// with its place in the grid file.
 const DESIGN_VALUE_BYTES: f64 = 8.0 + 40.0;
+/// One entry of the table that numbers the whole study's distinct references while it
+/// is expanded: a 16-byte key (body set, speed) and its id and first case (16 bytes)
+/// and the table's control byte, in a hash table at most 7/8 full that doubles when it
+/// grows.
+pub const REFERENCE_ID_BYTES: f64 = 2.0 * 33.0 * 8.0 / 7.0;
 /// Per worker beyond its case's data: thread stack, deflate state, FFT twiddles.
 const WORKER_BYTES: f64 = 4.0 * 1024.0 * 1024.0;
 
@@ -111,10 +116,14 @@ pub struct Shape {
     pub stored_samples: u64,
     /// Series and spectra stored as float32.
     pub float32: bool,
-    /// Cases in the study.
+    /// Cases the run holds: the study's, or one shard's.
     pub cases: u64,
-    /// Ideal references (an upper bound before expansion).
+    /// Ideal references the run's cases use (an upper bound before expansion).
     pub references: u64,
+    /// Distinct ideal references of the whole study, numbered while it is expanded
+    /// (0 before they are known): an entry of [`REFERENCE_ID_BYTES`] each, whatever
+    /// part of the study the run holds.
+    pub study_references: u64,
     /// Values a sampled design holds while the study is expanded (rows × parameters).
     pub design_values: u64,
     /// Runs per case with `replicates:` (0 without).
@@ -201,7 +210,8 @@ impl MemoryEstimate {
         let references =
             reference_cache_entries(shape.references, jobs, reference) as f64 * reference;
         let case_table = shape.cases as f64 * shape.case_bytes()
-            + shape.design_values as f64 * DESIGN_VALUE_BYTES;
+            + shape.design_values as f64 * DESIGN_VALUE_BYTES
+            + shape.study_references as f64 * REFERENCE_ID_BYTES;
         let fixed = FIXED_BYTES + (n + n_s + n_f) * 8.0;
         let total = jobs_f * per_case + queued + references + case_table + fixed;
         Self {
@@ -555,6 +565,7 @@ mod tests {
             float32: false,
             cases: 1_000_000,
             references: 1,
+            study_references: 1,
             design_values: 0,
             replicates: 0,
             revolutions: 0,
@@ -614,6 +625,7 @@ mod tests {
             float32: false,
             cases: 1,
             references: 1,
+            study_references: 1,
             design_values: 0,
             replicates: 0,
             revolutions: 0,
@@ -635,6 +647,7 @@ mod tests {
                 float32: false,
                 cases: 10_000_000,
                 references: 1,
+                study_references: 1,
                 design_values: 0,
                 replicates: 0,
                 revolutions: 0,
@@ -659,6 +672,7 @@ mod tests {
             float32: true,
             cases: 100,
             references: 2,
+            study_references: 2,
             design_values: 0,
             replicates: 0,
             revolutions: 0,

@@ -23,7 +23,7 @@ use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::mechanism::{CaseParams, Location};
+use crate::mechanism::CaseParams;
 use crate::recordings::read::Selector;
 use crate::signal::channel::AnalysisChannel;
 use crate::signal::envelope::EnvelopeSettings;
@@ -78,8 +78,51 @@ pub struct Case {
     pub id: u64,
     /// Everything that defines the simulation.
     pub params: CaseParams,
-    /// Index in [`Study::references`] of the ideal mechanism it is compared with.
+    /// Id of the ideal mechanism it is compared with ([`Reference::id`], found with
+    /// [`Study::reference`]).
     pub reference: usize,
+}
+
+/// An ideal mechanism cases compare with: a case's bodies, speed and gravity, without
+/// its bearing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reference {
+    /// Its id in the whole study: the references are numbered in the order of the
+    /// first case that uses each, whatever part of the study a [`Study`] holds.
+    pub id: usize,
+    /// The ideal mechanism.
+    pub params: CaseParams,
+}
+
+/// What a study is as a whole, whatever part of its cases a [`Study`] holds: the
+/// figures a shard's file records of the whole study, and the facts of every case
+/// that decide which variables the file has (the same in every shard, so that
+/// shards merge).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct WholeStudy {
+    /// Cases of the study.
+    pub cases: u64,
+    /// Distinct ideal references of the study.
+    pub references: u64,
+    /// Whether some case has a plain journal (`joint: dry_clearance` or
+    /// `lubricated`) at a location.
+    pub plain_joints: bool,
+    /// The names of the speed profiles some case runs ([`crate::mechanism::SpeedProfile::name`]), in
+    /// the order of their first case.
+    pub speed_profiles: Vec<&'static str>,
+}
+
+impl WholeStudy {
+    /// Counts one more case of the study, of parameters `p`.
+    fn add(&mut self, p: &CaseParams) {
+        self.cases += 1;
+        self.plain_joints |= p.joint.is_plain() && p.location != crate::mechanism::Location::Ideal;
+        if let Some(name) = p.speed.as_ref().map(|s| s.name()) {
+            if !self.speed_profiles.contains(&name) {
+                self.speed_profiles.push(name);
+            }
+        }
+    }
 }
 
 /// A validated, expanded study.
@@ -130,10 +173,16 @@ pub struct Study {
     pub output: SeriesOutput,
     /// Names of the parameters the grid varies, in expansion order.
     pub axes: Vec<String>,
-    /// The cases, in id order.
+    /// The cases it holds, in id order: every case of the study, or those of
+    /// [`Study::part`].
     pub cases: Vec<Case>,
-    /// Distinct ideal mechanisms (one per speed and body set) the cases compare with.
-    pub references: Vec<CaseParams>,
+    /// The distinct ideal mechanisms (one per speed and body set) the held cases
+    /// compare with, in id order.
+    pub references: Vec<Reference>,
+    /// The shard whose cases it holds; none: the whole study.
+    pub part: Option<Shard>,
+    /// The whole study's case and reference counts and the facts of all its cases.
+    pub whole: WholeStudy,
     /// The sampled design, when the grid file has one.
     pub design: Option<DesignInfo>,
     /// Replicates per case, when the grid file asks for them.
@@ -268,11 +317,7 @@ impl Study {
     /// ([`Effects::recorded_parameters`]), the `speed_*` fields of a profile only when
     /// some case runs that profile.
     pub fn recorded_parameters(&self) -> impl Iterator<Item = &'static params::ParamDef> + '_ {
-        let runs = |profile: &str| {
-            self.cases
-                .iter()
-                .any(|c| c.params.speed.as_ref().is_some_and(|s| s.name() == profile))
-        };
+        let runs = |profile: &str| self.whole.speed_profiles.contains(&profile);
         let (ramp, sine) = (runs("ramp"), runs("sine"));
         let plain = self.has_plain_joints();
         self.effects.recorded_parameters().filter(move |p| {
@@ -288,9 +333,19 @@ impl Study {
     /// at a location: then the file records the `journal_*` parameters and the
     /// `joint` label.
     pub fn has_plain_joints(&self) -> bool {
-        self.cases
-            .iter()
-            .any(|c| c.params.joint.is_plain() && c.params.location != Location::Ideal)
+        self.whole.plain_joints
+    }
+
+    /// The ideal mechanism of reference `id` ([`Reference::id`]).
+    ///
+    /// # Panics
+    /// When the study does not hold it: every held case's reference is held.
+    pub fn reference(&self, id: usize) -> &CaseParams {
+        let at = self
+            .references
+            .binary_search_by_key(&id, |r| r.id)
+            .unwrap_or_else(|_| panic!("reference {id} is not held"));
+        &self.references[at].params
     }
 }
 
@@ -390,13 +445,27 @@ impl Study {
     /// [`memory::MAX_GRID_BYTES`] before parsing it and a study whose run needs more
     /// memory than `limits` allow before expanding it.
     pub fn load_with(path: &Path, limits: &Limits) -> Result<Self, StudyError> {
+        Self::load_part(path, limits, None)
+    }
+
+    /// [`Study::load_with`], holding only the cases of `part` (every case without):
+    /// the whole study is expanded and checked, a case at a time, and whatever is a
+    /// property of the whole study (case and reference ids, the file's dimensions
+    /// and attributes) is the same as the whole study's, so that the shard's run is
+    /// bit for bit the whole run's cases of that shard. The memory check counts the
+    /// shard's cases.
+    pub fn load_part(
+        path: &Path,
+        limits: &Limits,
+        part: Option<Shard>,
+    ) -> Result<Self, StudyError> {
         let text = memory::read_capped(path).map_err(|message| StudyError {
             path: path.to_path_buf(),
             location: None,
             field: String::new(),
             message,
         })?;
-        Self::from_yaml_with(&text, path, limits)
+        Self::from_yaml_part(&text, path, limits, part)
     }
 
     /// Parses and validates grid-file `text` (`path` is used in messages only) under
@@ -407,7 +476,17 @@ impl Study {
 
     /// Parses and validates grid-file `text` under `limits`.
     pub fn from_yaml_with(text: &str, path: &Path, limits: &Limits) -> Result<Self, StudyError> {
-        expand::build(text, path, limits)
+        Self::from_yaml_part(text, path, limits, None)
+    }
+
+    /// [`Study::from_yaml_with`], holding only the cases of `part` ([`Study::load_part`]).
+    pub fn from_yaml_part(
+        text: &str,
+        path: &Path,
+        limits: &Limits,
+        part: Option<Shard>,
+    ) -> Result<Self, StudyError> {
+        expand::build(text, path, limits, part)
     }
 
     /// What a run of this study on `jobs` workers needs in memory.
@@ -424,6 +503,7 @@ impl Study {
                 float32: self.float32,
                 cases: self.cases.len() as u64,
                 references: self.references.len() as u64,
+                study_references: self.whole.references,
                 design_values: self
                     .design
                     .as_ref()
@@ -482,8 +562,9 @@ impl Study {
         })
     }
 
-    /// The ids of shard `k` of `n` (1-based `k`): cases whose id ≡ k − 1 (mod n),
-    /// so shards are balanced and their union is the whole study.
+    /// The rows of [`Study::cases`] of shard `k` of `n` (1-based `k`): cases whose id
+    /// ≡ k − 1 (mod n), so shards are balanced and their union is the whole study.
+    /// Of a study holding only that shard ([`Study::part`]), every row.
     pub fn shard(&self, k: u64, n: u64) -> Vec<usize> {
         (0..self.cases.len())
             .filter(|&i| self.cases[i].id % n == k - 1)

@@ -34,13 +34,15 @@ pub(super) fn max_frequency(
 /// The order analysis the file asks for (`spectra: {orders: true}`,
 /// `envelope: {orders: true}`), or `None`: `R` is the fewest whole revolutions any
 /// case turns between the analysed window's first and last samples (at least one),
-/// `M` the window's sample count (docs/model.md §7.9).
+/// `M` the window's sample count (docs/model.md §7.9); `fewest` gives the fewest whole
+/// revolutions of any case between two times (s) and the first case that turns so
+/// few.
 pub(super) fn order_settings(
     ctx: &Ctx<'_>,
     file: &GridFile,
     sampling: &Sampling,
     transient: f64,
-    cases: &[Case],
+    fewest: impl FnOnce(f64, f64) -> Option<(usize, u64)>,
 ) -> Result<Option<OrderSettings>, StudyError> {
     let spectra = file.spectra.as_ref().and_then(|s| s.orders.as_ref());
     let envelope = file.envelope.as_ref().and_then(|e| e.value.orders.as_ref());
@@ -57,14 +59,7 @@ pub(super) fn order_settings(
         window.start as f64 / sampling.sample_rate,
         (window.end.max(1) - 1) as f64 / sampling.sample_rate,
     );
-    let mut fewest: Option<(usize, u64)> = None;
-    for c in cases {
-        let r = whole_revolutions(&c.params.drive(), first, last);
-        if fewest.is_none_or(|(f, _)| r < f) {
-            fewest = Some((r, c.id));
-        }
-    }
-    let (revolutions, id) = fewest.unwrap_or((0, 0));
+    let (revolutions, id) = fewest(first, last).unwrap_or((0, 0));
     if revolutions == 0 || window.len() < 2 {
         return Err(ctx.err(
             Some(at(&key.referenced)),
@@ -123,18 +118,14 @@ pub(super) fn sampling_of(ctx: &Ctx<'_>, file: &GridFile) -> Result<Sampling, St
 }
 
 /// The start of the analysed window (s): the grid's `transient`, or `auto` (the
-/// longest first crank revolution of any case, at most half the duration); it must
-/// leave two samples for the spectra and metrics.
+/// longest first crank `revolution` of any case (s), at most half the duration); it
+/// must leave two samples for the spectra and metrics.
 pub(super) fn transient_of(
     ctx: &Ctx<'_>,
     file: &GridFile,
     sampling: &Sampling,
-    cases: &[Case],
+    revolution: f64,
 ) -> Result<f64, StudyError> {
-    let revolution = cases
-        .iter()
-        .map(|c| c.params.revolution_time())
-        .fold(0.0, f64::max);
     let transient = match &file.transient {
         None => revolution.min(0.5 * sampling.duration),
         Some(S {

@@ -239,7 +239,7 @@ pub(super) fn expand_grid(
     resolved: &[Vec<ResolvedAxis<'_>>],
     count: u64,
     effects: &Effects,
-    cases: &mut Vec<Case>,
+    cases: &mut Collected,
 ) -> Result<(), StudyError> {
     let mut picks = vec![0usize; resolved.len()];
     for i in 0..count {
@@ -279,7 +279,7 @@ pub(super) fn expand_explicit(
     prov: &Provenance,
     design: Option<&Vec<ResolvedAxis<'_>>>,
     effects: &Effects,
-    cases: &mut Vec<Case>,
+    cases: &mut Collected,
 ) -> Result<(), StudyError> {
     let rows = design.map_or(1, |g| g[0].values.len());
     for (c, explicit) in file.cases.iter().enumerate() {
@@ -324,7 +324,7 @@ pub(super) fn expand_explicit(
                 }
             }
             super::check_explicit_joint_keys(ctx, c, &explicit.value, &params)?;
-            let id = cases.len() as u64;
+            let id = cases.next_id();
             cases.push(finish_case(ctx, params, effects, || case_prov, id)?);
         }
     }

@@ -73,16 +73,9 @@ pub(super) fn journal_section(
 pub(super) fn check_joint_keys(
     ctx: &Ctx<'_>,
     file: &GridFile,
-    cases: &[Case],
+    joints: collect::Joints,
 ) -> Result<(), StudyError> {
-    let joints = || {
-        cases
-            .iter()
-            .filter(|c| c.params.location != Site::Ideal)
-            .map(|c| c.params.joint)
-    };
-    let any_plain = joints().any(JointKind::is_plain);
-    let any_ball = joints().any(|j| !j.is_plain());
+    let (any_plain, any_ball) = (joints.plain, joints.ball);
     if let (Some(j), false) = (&file.journal, any_plain) {
         return Err(ctx.err(
             Some(at(&j.referenced)),
@@ -100,7 +93,7 @@ pub(super) fn check_joint_keys(
         } else {
             continue;
         };
-        if !acts && joints().next().is_some() {
+        if !acts && joints.located {
             return Err(ctx.err(
                 Some(place),
                 &field,

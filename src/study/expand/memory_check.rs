@@ -50,12 +50,16 @@ pub(super) fn sample_rate_place(file: &GridFile) -> (u64, u64) {
 pub(super) struct Known {
     /// Samples per case.
     pub samples: u64,
-    /// Cases in the study.
+    /// Cases the study holds: all, or one shard's.
     pub cases: u64,
+    /// Whether the study holds one shard's cases only.
+    pub sharded: bool,
     /// Values a sampled design holds while the study is expanded.
     pub design_values: u64,
-    /// Ideal references (0 before they are assigned).
+    /// Ideal references the held cases use (0 before they are assigned).
     pub references: u64,
+    /// Distinct ideal references of the whole study (0 before they are numbered).
+    pub study_references: u64,
     /// Most whole revolutions of a case (0 before the speeds are known).
     pub revolutions: u64,
     /// Knots of the longest `speed:` table in the file (each case that has it holds
@@ -98,19 +102,15 @@ pub(super) fn check_lower_bound(
         float32: true,
         cases: known.cases,
         references: known.references,
+        study_references: known.study_references,
         design_values: known.design_values,
         replicates: 0,
         revolutions: known.revolutions,
         order_spectra: 0,
         speed_knots: known.speed_knots,
     };
-    check(
-        ctx,
-        places,
-        &MemoryEstimate::of(shape, limits.jobs),
-        limits,
-        true,
-    )
+    let estimate = MemoryEstimate::of(shape, limits.jobs);
+    check(ctx, places, &estimate, limits, (true, known.sharded))
 }
 
 /// Refuses the finished `study` when its run's memory estimate exceeds `limits`.
@@ -120,23 +120,25 @@ pub(super) fn check_study(
     study: &Study,
     limits: &Limits,
 ) -> Result<(), StudyError> {
+    let estimate = study.memory_estimate(limits.jobs);
     check(
         ctx,
         places,
-        &study.memory_estimate(limits.jobs),
+        &estimate,
         limits,
-        false,
+        (false, study.part.is_some()),
     )
 }
 
-/// Refuses an `estimate` (a lower bound when `lower_bound`) above `limits.memory`,
-/// naming the estimate, its parts, the limit and what lowers it.
+/// Refuses an `estimate` (a lower bound when `lower_bound`; of one shard's cases when
+/// `sharded`) above `limits.memory`, naming the estimate, its parts, the limit and
+/// what lowers it.
 fn check(
     ctx: &Ctx<'_>,
     places: &Places,
     estimate: &MemoryEstimate,
     limits: &Limits,
-    lower_bound: bool,
+    (lower_bound, sharded): (bool, bool),
 ) -> Result<(), StudyError> {
     if estimate.total <= limits.memory as f64 {
         return Ok(());
@@ -173,10 +175,12 @@ fn check(
             places.max_cases,
             "grid",
             format!(
-                "fewer cases ({} now: fewer axis values), or fewer revolutions per case \
-                 (a lower speed or a shorter duration); shards do not help, since every \
-                 shard holds the whole case table",
-                shape.cases
+                "fewer cases ({} {}: fewer axis values), more shards (`--shard K/N` \
+                 with a larger N: a shard holds only its own cases, about {} each), or \
+                 fewer revolutions per case (a lower speed or a shorter duration)",
+                shape.cases,
+                if sharded { "in this shard" } else { "now" },
+                bytes(shape.case_bytes()),
             ),
         ),
     };

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use super::*;
 use crate::bearing::BearingParams;
 use crate::recordings::read::{read_samples, ColumnRef, ReadError, Selector};
-use crate::study::{Recording, Recordings};
+use crate::study::{Recording, Recordings, WholeStudy};
 
 /// The default name of a recordings study's measured series.
 const SERIES: &str = "vibration";
@@ -47,7 +47,10 @@ pub(super) fn build_recordings(
     let read = read.into_iter().map(|(r, _)| r).collect();
     let transient = match file.transient {
         None => 0.0,
-        Some(_) => transient_of(ctx, &file, &sampling, &cases)?,
+        Some(_) => {
+            let revolution = cases.iter().map(|c| c.params.revolution_time());
+            transient_of(ctx, &file, &sampling, revolution.fold(0.0, f64::max))?
+        }
     };
     let name = file.series.as_ref().map_or(SERIES, |s| s.value.as_str());
     let recordings = Recordings {
@@ -75,12 +78,20 @@ pub(super) fn build_recordings(
         spectrum_channels,
         max_frequency: analysis::max_frequency(ctx, file.spectra.as_ref(), &sampling)?,
         envelope,
-        orders: order_settings(ctx, &file, &sampling, transient, &cases)?,
+        orders: order_settings(ctx, &file, &sampling, transient, |first, last| {
+            let drives = cases.iter().map(|c| (c.id, c.params.drive()));
+            collect::fewest_whole_revolutions(drives, first, last)
+        })?,
         float32,
         compression,
         axes: Vec::new(),
+        whole: cases.iter().fold(WholeStudy::default(), |mut whole, c| {
+            whole.add(&c.params);
+            whole
+        }),
         cases,
         references: Vec::new(),
+        part: None,
         design: None,
         replicates: None,
         chaos_check: false,

@@ -1,22 +1,7 @@
 //! The ideal-mechanism references: one per distinct speed and body set, shared by the
-//! cases that need it.
+//! cases that need it, numbered as the cases are collected ([`super::collect`]).
 
 use super::*;
-
-/// One reference per distinct ideal mechanism, found by hashing (not by comparing
-/// every case with every reference); sets each case's `reference`.
-pub(super) fn assign_references(cases: &mut [Case]) -> Vec<CaseParams> {
-    let mut references: Vec<CaseParams> = Vec::new();
-    let mut index: HashMap<ReferenceKey, usize> = HashMap::new();
-    for case in cases {
-        let reference = reference_of(&case.params);
-        case.reference = *index.entry(reference_key(&reference)).or_insert_with(|| {
-            references.push(reference);
-            references.len() - 1
-        });
-    }
-    references
-}
 
 /// The ideal mechanism a case is compared with: same bodies, speed and gravity.
 pub(super) fn reference_of(p: &CaseParams) -> CaseParams {
@@ -31,12 +16,14 @@ pub(super) fn reference_of(p: &CaseParams) -> CaseParams {
     }
 }
 
-/// What an ideal mechanism depends on: its bodies, speed (with the profile's numbers)
-/// and gravity. Destructured in full, so that a new parameter cannot be left out
-/// unnoticed.
-pub(super) type ReferenceKey = ([u64; 9], Option<Vec<u64>>, bool);
+/// What an ideal mechanism depends on beside its constant speed: its bodies, speed
+/// profile (with its numbers) and gravity.
+pub(super) type BodyKey = ([u64; 8], Option<Vec<u64>>, bool);
 
-pub(super) fn reference_key(p: &CaseParams) -> ReferenceKey {
+/// What an ideal mechanism depends on: its [`BodyKey`] and its `rpm` (as bits, −0
+/// as +0). Destructured in full, so that a new parameter cannot be left out
+/// unnoticed.
+pub(super) fn reference_key(p: &CaseParams) -> (BodyKey, u64) {
     let CaseParams {
         mechanism,
         bearing: _,
@@ -60,19 +47,18 @@ pub(super) fn reference_key(p: &CaseParams) -> ReferenceKey {
         slider_inertia,
     } = mechanism;
     let bits = |x: &f64| (x + 0.0).to_bits();
+    let body = [
+        bits(crank_length),
+        bits(rod_length),
+        bits(crank_mass),
+        bits(crank_inertia),
+        bits(rod_mass),
+        bits(rod_inertia),
+        bits(slider_mass),
+        bits(slider_inertia),
+    ];
     (
-        [
-            bits(crank_length),
-            bits(rod_length),
-            bits(crank_mass),
-            bits(crank_inertia),
-            bits(rod_mass),
-            bits(rod_inertia),
-            bits(slider_mass),
-            bits(slider_inertia),
-            bits(rpm),
-        ],
-        speed.as_ref().map(SpeedProfile::key),
-        *gravity,
+        (body, speed.as_ref().map(SpeedProfile::key), *gravity),
+        bits(rpm),
     )
 }

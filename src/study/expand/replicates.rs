@@ -5,7 +5,7 @@ use crate::error::number;
 use crate::mechanism::{CaseParams, Location};
 use crate::study::config::GridFile;
 use crate::study::units::Dimension;
-use crate::study::{Case, Replicates, StudyError};
+use crate::study::{Replicates, StudyError};
 
 /// Most runs per case `replicates.count` allows.
 pub(super) const MAX_REPLICATES: u64 = 1000;
@@ -25,7 +25,7 @@ const CONTACT_SCALE: f64 = 1e-6;
 /// `c`, or of [`CONTACT_SCALE`] at zero clearance); `None` for the ideal mechanism (no bearing to
 /// start off centre in). A perturbed start then lies in replicate 0's contact state
 /// and changes every contact force by about 1.5 % at most (docs/model.md §9.5).
-fn perturbation_bound(case: &CaseParams) -> Option<(f64, String)> {
+pub(super) fn perturbation_bound(case: &CaseParams) -> Option<(f64, String)> {
     if case.location == Location::Ideal {
         return None;
     }
@@ -72,18 +72,17 @@ fn micrometres(x: f64) -> String {
 }
 
 /// Refuses a perturbation above the bound of any case ([`perturbation_bound`]), naming
-/// the case where the bound is smallest.
+/// the case where the bound is smallest (`tightest`: its id, the bound and what it is
+/// 1 % of).
 fn check_perturbation(
     ctx: &Ctx<'_>,
     file: &GridFile,
     perturbation: f64,
-    cases: &[Case],
+    tightest: &Option<(u64, (f64, String))>,
 ) -> Result<(), StudyError> {
-    let tightest = cases
-        .iter()
-        .filter_map(|c| perturbation_bound(&c.params).map(|b| (c.id, b)))
-        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
-    let Some((id, (bound, scale))) = tightest.filter(|(_, (bound, _))| perturbation > *bound)
+    let Some((id, (bound, scale))) = tightest
+        .as_ref()
+        .filter(|(_, (bound, _))| perturbation > *bound)
     else {
         return Ok(());
     };
@@ -97,18 +96,19 @@ fn check_perturbation(
              every contact force changed by about 1.5 % at most)",
             r.perturbation.value,
             micrometres(perturbation),
-            micrometres(bound)
+            micrometres(*bound)
         ),
     ))
 }
 
 /// The study's replicates (none without the section) and whether its chaos check
 /// runs: `chaos_check` as given, else on with two or more replicates; on needs two.
-/// The perturbation is checked against every case's bound.
+/// The perturbation is checked against every case's bound (`tightest`, the smallest:
+/// its case id, the bound and what it is 1 % of).
 pub(super) fn resolve(
     ctx: &Ctx<'_>,
     file: &GridFile,
-    cases: &[Case],
+    tightest: &Option<(u64, (f64, String))>,
 ) -> Result<(Option<Replicates>, bool), StudyError> {
     let replicates = match &file.replicates {
         None => None,
@@ -145,7 +145,7 @@ pub(super) fn resolve(
                     ),
                 ));
             }
-            check_perturbation(ctx, file, perturbation, cases)?;
+            check_perturbation(ctx, file, perturbation, tightest)?;
             Some(Replicates {
                 count: count as usize,
                 perturbation,

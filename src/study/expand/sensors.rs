@@ -8,28 +8,28 @@ use crate::signal::sensor::{Noise, Sensor, Transducer, CLEAN_SUFFIX};
 use crate::simulate::Sampling;
 use crate::study::config::{NoiseSection, SensorSection, S};
 use crate::study::units::Dimension;
-use crate::study::{Case, StudyError};
+use crate::study::StudyError;
 
 /// Refuses a case of another noise realisation than 0 (`noise_realization`, set by an
-/// axis, a design or a case) when no sensor of the study has `noise:`: the realisation
-/// would change nothing.
+/// axis, a design or a case; `first` is the first such case's id and realisation)
+/// when no sensor of the study has `noise:`: the realisation would change nothing.
 pub(super) fn check_realizations(
     ctx: &Ctx<'_>,
     sensors: &[Sensor],
-    cases: &[Case],
+    first: Option<(u64, u64)>,
 ) -> Result<(), StudyError> {
     if sensors.iter().any(|s| s.noise.is_some()) {
         return Ok(());
     }
-    match cases.iter().find(|c| c.params.noise_realization != 0) {
-        Some(case) => Err(ctx.err(
+    match first {
+        Some((id, realization)) => Err(ctx.err(
             None,
             "noise_realization",
             format!(
                 "{} (case {}) draws another realisation of the sensors' noise, and no sensor \
                  has `noise:`; give a sensor `noise: {{snr_db: ..., seed: ...}}` or leave \
                  noise_realization out",
-                case.params.noise_realization, case.id
+                realization, id
             ),
         )),
         None => Ok(()),

@@ -41,7 +41,7 @@ fn study_attributes(
         ),
         ("grid_yaml".to_string(), study.source.clone().into()),
         ("grid_axes".to_string(), study.axes.join(",").into()),
-        ("study_cases".to_string(), (study.cases.len() as i64).into()),
+        ("study_cases".to_string(), (study.whole.cases as i64).into()),
         ("file_cases".to_string(), (shard_rows as i64).into()),
         (
             "shard".to_string(),

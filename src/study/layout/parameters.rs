@@ -175,10 +175,9 @@ fn selector_text(selector: &Selector) -> String {
     }
 }
 
-/// The `[reference]` parameter variables of the references `ids` (indices into
-/// `study.references`): each ideal run's speed and speed profile.
+/// The `[reference]` parameter variables of the references `ids` ([`Study::reference`]): each ideal run's speed and speed profile.
 pub(super) fn reference_parameters(study: &Study, ids: &[u64]) -> Vec<Param> {
-    let references = || ids.iter().map(|&id| &study.references[id as usize]);
+    let references = || ids.iter().map(|&id| study.reference(id as usize));
     vec![
         Param {
             spec: VarSpec::new("reference_rpm", "rpm", "crank speed of the ideal mechanism"),
