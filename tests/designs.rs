@@ -356,8 +356,9 @@ fn a_shard_holds_only_its_own_cases_with_the_whole_studys_figures() {
         let (a, b) = (s.memory_estimate(1), whole.memory_estimate(1));
         assert!(a.case_table < 0.5 * b.case_table, "{part}: {a:?} {b:?}");
     }
-    // Case 30, the explicit case after the design's 30 rows, is in shard 3/4 only.
-    let late = speeds_design("lhs", 30, "cases: [{noise_realization: 1}]\n");
+    // Case 30, the first of the design's rows at the second grid value, is in shard
+    // 3/4 only.
+    let late = speeds_design("lhs", 30, "grid: {noise_realization: [0, 1]}\n");
     let refusal = Study::from_yaml(&late, path).unwrap_err();
     assert!(refusal.to_string().contains("case 30"), "{refusal}");
     for k in 1..=4 {
