@@ -250,14 +250,21 @@ impl MemoryEstimate {
     }
 
     /// The parts held for the whole run: `3 references x 2.75 MiB, case table 12
-    /// cases x 2.19 KiB = 26.2 KiB` (`58 of 16384 references x …` when the run keeps
-    /// only some of them).
+    /// cases x 2.19 KiB and the study's 3 reference ids = 26.4 KiB` (`58 of 16384
+    /// references x …` when the run keeps only some of them; the design's values
+    /// named too when it has one).
     fn held_parts(&self) -> String {
         let s = &self.shape;
         let reference = (CHANNELS.len() as f64 + 1.0) * s.samples as f64 * 8.0;
         let kept = reference_cache_entries(s.references, self.jobs, reference);
+        let study = match (s.design_values, s.study_references) {
+            (0, 0) => String::new(),
+            (0, r) => format!(" and the study's {r} reference ids"),
+            (d, 0) => format!(" and the study's {d} design values"),
+            (d, r) => format!(" and the study's {d} design values and {r} reference ids"),
+        };
         format!(
-            "{}{} reference{} x {}, case table {} cases x {} = {}",
+            "{}{} reference{} x {}, case table {} cases x {}{study} = {}",
             if kept < s.references {
                 format!("{kept} of ")
             } else {
