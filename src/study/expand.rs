@@ -111,10 +111,9 @@ fn build_simulated(
     )?;
     check_joint_keys(ctx, &file, collected.joints)?;
     let transient = transient_of(ctx, &file, &sampling, collected.longest_revolution)?;
-    let sensors = match &file.sensors {
-        Some(list) => sensors::sensors(ctx, list, &sampling, &effects)?,
-        None => Vec::new(),
-    };
+    let list = file.sensors.as_ref();
+    let sensors = list.map(|l| sensors::sensors(ctx, l, &sampling, &effects));
+    let sensors = sensors.transpose()?.unwrap_or_default();
     sensors::check_realizations(ctx, &sensors, collected.realization)?;
     let analysed = Analysed::Simulated(&sensors[..], &effects);
     let (window, spectrum_channels) = spectra_settings(ctx, file.spectra.as_ref(), analysed)?;
@@ -125,15 +124,9 @@ fn build_simulated(
         .map(|e| envelope_settings(ctx, e, &sampling, transient, analysed))
         .transpose()?;
     let (float32, compression) = output_settings(ctx, file.output.as_ref())?;
-    let (replicates, chaos_check) = replicates::resolve(ctx, &file, &collected.tightest)?;
-    let revolutions = collected.most_revolutions(transient, sampling.duration);
-    check_samples_per_revolution(ctx, &file, revolutions, &sampling)?;
-    let orders = order_settings(ctx, &file, &sampling, transient, |first, last| {
-        collected.fewest_whole_revolutions(first, last)
-    })?;
+    let figures = case_figures(ctx, &file, &sampling, transient, &collected)?;
     let (cases, references, whole) = collected.finish();
-    known.references = references.len() as u64;
-    (known.study_references, known.revolutions) = (whole.references, revolutions as u64);
+    known.expanded(references.len(), whole.references, figures.revolutions);
     memory_check::check_lower_bound(ctx, &places, &known, limits)?;
     let mut study = Study {
         name: file.name.value.clone(),
@@ -148,7 +141,7 @@ fn build_simulated(
         spectrum_channels,
         max_frequency,
         envelope,
-        orders,
+        orders: figures.orders,
         float32,
         compression,
         axes: axes_names,
@@ -157,9 +150,9 @@ fn build_simulated(
         part,
         whole,
         design,
-        replicates,
-        chaos_check,
-        revolutions,
+        replicates: figures.replicates,
+        chaos_check: figures.chaos_check,
+        revolutions: figures.revolutions,
         sensors: Vec::new(),
         output: SeriesOutput::default(),
         recordings: None,
@@ -168,6 +161,42 @@ fn build_simulated(
     add_outputs(ctx, list, output, &mut study, sensors)?;
     memory_check::check_study(ctx, &places, &study, limits)?;
     Ok(study)
+}
+
+/// What the study's cases decide once the analysed window is known.
+struct CaseFigures {
+    /// Replicates per case, when asked for.
+    replicates: Option<super::Replicates>,
+    /// Whether the chaos check runs.
+    chaos_check: bool,
+    /// The most whole revolutions of a case in the analysed window.
+    revolutions: usize,
+    /// The order analysis, when asked for.
+    orders: Option<OrderSettings>,
+}
+
+/// What the study's `collected` cases decide once the analysed window starts at
+/// `transient` (s): the replicates and chaos check, the most whole revolutions of a
+/// case (refused below 2 samples per revolution) and the order analysis.
+fn case_figures(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+    transient: f64,
+    collected: &Collected,
+) -> Result<CaseFigures, StudyError> {
+    let (replicates, chaos_check) = replicates::resolve(ctx, file, &collected.tightest)?;
+    let revolutions = collected.most_revolutions(transient, sampling.duration);
+    check_samples_per_revolution(ctx, file, revolutions, sampling)?;
+    let orders = order_settings(ctx, file, sampling, transient, |first, last| {
+        collected.fewest_whole_revolutions(first, last)
+    })?;
+    Ok(CaseFigures {
+        replicates,
+        chaos_check,
+        revolutions,
+        orders,
+    })
 }
 
 /// Refuses the keys of a `recordings:` study (`window`, `series`) in a study of

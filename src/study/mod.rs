@@ -113,6 +113,15 @@ pub struct WholeStudy {
 }
 
 impl WholeStudy {
+    /// The figures of a study of `cases`, all of them held, without references.
+    fn of(cases: &[Case]) -> Self {
+        let mut whole = Self::default();
+        for c in cases {
+            whole.add(&c.params);
+        }
+        whole
+    }
+
     /// Counts one more case of the study, of parameters `p`.
     fn add(&mut self, p: &CaseParams) {
         self.cases += 1;

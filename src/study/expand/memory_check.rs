@@ -67,6 +67,21 @@ pub(super) struct Known {
     pub speed_knots: u64,
 }
 
+impl Known {
+    /// What the expansion found: `references` used by the held cases, of
+    /// `study_references` in the study, and a case's most whole `revolutions`.
+    pub(super) fn expanded(
+        &mut self,
+        references: usize,
+        study_references: u64,
+        revolutions: usize,
+    ) {
+        self.references = references as u64;
+        self.study_references = study_references;
+        self.revolutions = revolutions as u64;
+    }
+}
+
 /// Knots of the longest `speed:` table of `file`: the top-level one or an explicit
 /// case's.
 pub(super) fn speed_knots(file: &GridFile) -> u64 {

@@ -45,13 +45,7 @@ pub(super) fn build_recordings(
     }
     let sampling = common_sampling(ctx, &file, &read)?;
     let read = read.into_iter().map(|(r, _)| r).collect();
-    let transient = match file.transient {
-        None => 0.0,
-        Some(_) => {
-            let revolution = cases.iter().map(|c| c.params.revolution_time());
-            transient_of(ctx, &file, &sampling, revolution.fold(0.0, f64::max))?
-        }
-    };
+    let transient = recorded_transient(ctx, &file, &sampling, &cases)?;
     let name = file.series.as_ref().map_or(SERIES, |s| s.value.as_str());
     let recordings = Recordings {
         series: AnalysisChannel::recording(name),
@@ -78,17 +72,11 @@ pub(super) fn build_recordings(
         spectrum_channels,
         max_frequency: analysis::max_frequency(ctx, file.spectra.as_ref(), &sampling)?,
         envelope,
-        orders: order_settings(ctx, &file, &sampling, transient, |first, last| {
-            let drives = cases.iter().map(|c| (c.id, c.params.drive()));
-            collect::fewest_whole_revolutions(drives, first, last)
-        })?,
+        orders: recorded_orders(ctx, &file, &sampling, transient, &cases)?,
         float32,
         compression,
         axes: Vec::new(),
-        whole: cases.iter().fold(WholeStudy::default(), |mut whole, c| {
-            whole.add(&c.params);
-            whole
-        }),
+        whole: WholeStudy::of(&cases),
         cases,
         references: Vec::new(),
         part: None,
@@ -103,6 +91,35 @@ pub(super) fn build_recordings(
     study.output = series_output(ctx, file.output.as_ref(), &study)?;
     memory_check::check_study(ctx, &memory_check::Places::of(&file), &study, limits)?;
     Ok(study)
+}
+
+/// The start of a recordings study's analysed window (s): 0 without `transient`, else
+/// as a simulated study's ([`transient_of`]) over the recordings' `cases`.
+fn recorded_transient(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+    cases: &[Case],
+) -> Result<f64, StudyError> {
+    if file.transient.is_none() {
+        return Ok(0.0);
+    }
+    let revolution = cases.iter().map(|c| c.params.revolution_time());
+    transient_of(ctx, file, sampling, revolution.fold(0.0, f64::max))
+}
+
+/// A recordings study's order analysis ([`order_settings`]) over its `cases`.
+fn recorded_orders(
+    ctx: &Ctx<'_>,
+    file: &GridFile,
+    sampling: &Sampling,
+    transient: f64,
+    cases: &[Case],
+) -> Result<Option<OrderSettings>, StudyError> {
+    order_settings(ctx, file, sampling, transient, |first, last| {
+        let drives = cases.iter().map(|c| (c.id, c.params.drive()));
+        collect::fewest_whole_revolutions(drives, first, last)
+    })
 }
 
 /// A place in the grid file, (line, column), when serde kept one.
