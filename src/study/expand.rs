@@ -287,17 +287,18 @@ fn expand_cases(
     (groups, axes): (&[Vec<Axis<'_>>], &[String]),
     (total, count, part): (u64, u64, Option<Shard>),
 ) -> Result<(Collected, Option<super::DesignInfo>), StudyError> {
-    let sampled = design::resolve(ctx, file, base, effects, axes)?;
+    let mut sampled = design::resolve(ctx, file, base, effects, axes)?;
+    let info = sampled.as_ref().map(|d| d.info.clone());
     let mut resolved = resolve_axes(ctx, base, groups, effects)?;
     check_repeats(ctx, &resolved)?;
-    if let Some(d) = &sampled {
+    if let Some(d) = &mut sampled {
         resolved.push(d.group());
     }
     let mut cases = Collected::new(part, total, file.replicates.is_some());
     expand_grid(ctx, base, prov, &resolved, count, effects, &mut cases)?;
-    let explicit_design = sampled.as_ref().map(|_| &resolved[resolved.len() - 1]);
+    let explicit_design = info.as_ref().map(|_| &resolved[resolved.len() - 1]);
     expand_explicit(ctx, file, base, prov, explicit_design, effects, &mut cases)?;
-    Ok((cases, sampled.map(|d| d.info)))
+    Ok((cases, info))
 }
 
 /// Refuses a speed that turns the crank more than once per two samples: no series

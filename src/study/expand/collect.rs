@@ -34,7 +34,7 @@ pub(super) struct Collected {
     references: Vec<Reference>,
     /// The ids of [`Collected::references`].
     held: HashSet<usize>,
-    /// Each distinct [`BodyKey`]'s index, with its speed profile.
+    /// The index of each distinct [`BodyKey`] (body set, speed profile, gravity).
     bodies: HashMap<BodyKey, u32>,
     /// The speed profile of each body index.
     profiles: Vec<Option<SpeedProfile>>,

@@ -22,14 +22,16 @@ pub(super) struct Design {
 }
 
 impl Design {
-    /// The design as one expansion group of `info.rows` values per axis.
-    pub fn group(&self) -> Vec<ResolvedAxis<'_>> {
+    /// The design as one expansion group of `info.rows` values per axis. Its columns
+    /// move into the group, each freed once copied: a design's values are held once.
+    pub fn group(&mut self) -> Vec<ResolvedAxis<'_>> {
+        let columns = std::mem::take(&mut self.columns);
         self.fields
             .iter()
-            .zip(&self.columns)
+            .zip(columns)
             .map(|(field, (values, place))| ResolvedAxis {
                 field,
-                values: values.iter().map(|&t| (t, *place)).collect(),
+                values: values.into_iter().map(|t| (t, place)).collect(),
             })
             .collect()
     }
