@@ -8,6 +8,7 @@ use std::path::Path;
 use studyrun::study::design::Method;
 use studyrun::study::params::lookup;
 use studyrun::study::{Case, Limits, Shard};
+use studyrun::RunOptions;
 use studyrun::Study;
 
 const HEAD: &str = "name: d\nduration: 0.02\nsample_rate: 1000\neffects: [clearance, waviness, damping]\nbearing: {damping: 100}\n";
@@ -355,6 +356,22 @@ fn a_shard_holds_only_its_own_cases_with_the_whole_studys_figures() {
         assert_eq!(s.shard(k, 4), (0..s.cases.len()).collect::<Vec<_>>());
         let (a, b) = (s.memory_estimate(1), whole.memory_estimate(1));
         assert!(a.case_table < 0.5 * b.case_table, "{part}: {a:?} {b:?}");
+        // Run as the whole study or as another shard, it would write a wrong file.
+        for other in [None, Some(Shard { k: k % 4 + 1, n: 4 })] {
+            let opts = RunOptions {
+                output: "never.h5".into(),
+                jobs: 1,
+                resume: false,
+                force: false,
+                shard: other,
+                quiet: true,
+            };
+            let refusal = studyrun::run_study(&s, &opts).unwrap_err().to_string();
+            assert!(
+                refusal.contains(&format!("only the cases of shard {part}")),
+                "{refusal}"
+            );
+        }
     }
     // Case 30, the first of the design's rows at the second grid value, is in shard
     // 3/4 only.
