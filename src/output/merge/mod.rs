@@ -126,8 +126,12 @@ fn check_inputs(output: &Path, shards: &[PathBuf]) -> Result<(), OutputError> {
 
 #[cfg(test)]
 mod tests {
+    use super::survey::without_cases;
     use super::*;
-    use crate::output::{provenance, Storage};
+    use crate::output::{
+        provenance, AttrValue, CaseRecord, Param, ParamValues, Status, Storage, StudyReader,
+        StudyWriter, VarSpec,
+    };
 
     /// The layout of a file of cases `ids` of a 7-case study (`shard` "K/3" or ""),
     /// with a numeric and a text parameter, a spectrum, a metric and one reference
