@@ -243,8 +243,9 @@ impl StudyReader {
     /// Reads rows `rows` of every `[case, ...]` variable, one HDF5 read per variable,
     /// as [`StudyReader::read_case`] reads each of them.
     pub fn read_cases(&self, rows: Range<usize>) -> Result<Vec<CaseData>, StudyFileError> {
-        if let Some(last) = rows.clone().last() {
-            check_row(&self.path, CASE, last, self.layout.n_cases())?;
+        match rows.clone().last() {
+            Some(last) => check_row(&self.path, CASE, last, self.layout.n_cases())?,
+            None => return Ok(Vec::new()),
         }
         let (l, d) = (&self.layout, &self.rows);
         let read = |datasets: &[Dataset], specs: &[VarSpec]| {

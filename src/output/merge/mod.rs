@@ -264,6 +264,28 @@ mod tests {
     }
 
     #[test]
+    fn a_block_of_rows_reads_as_its_rows_one_by_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("whole.h5");
+        write(&path, &[0, 1, 2, 3, 4, 5, 6], "");
+        let r = StudyReader::open(&path).unwrap();
+        let block = r.read_cases(2..6).unwrap();
+        assert_eq!(block.len(), 4);
+        for (k, case) in block.iter().enumerate() {
+            assert_eq!(case, &r.read_case(2 + k).unwrap(), "row {}", 2 + k);
+        }
+        assert_eq!(block[0].metrics, vec![1.0]);
+        assert_eq!(block[0].spectra, vec![vec![2.0, -2.0]]);
+        assert_eq!(
+            (block[3].status, block[3].message.as_str()),
+            (Status::Failed, "diverged")
+        );
+        assert!(r.read_cases(3..3).unwrap().is_empty());
+        let past = r.read_cases(5..8).unwrap_err().to_string();
+        assert!(past.contains("case row 7 is out of range"), "{past}");
+    }
+
+    #[test]
     fn an_unfilled_file_takes_its_parameters_in_order_and_refuses_to_finish_without_them() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("unfilled.h5");
