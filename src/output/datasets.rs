@@ -1,8 +1,11 @@
-//! The open per-row datasets of a study file, shared by the writer and the reader.
+//! The open per-row datasets of a study file, shared by the writer and the reader,
+//! and reading blocks of their rows.
 
+use std::ops::Range;
 use std::path::Path;
 
 use hdf5::{Dataset, File};
+use ndarray::{Array2, Axis};
 
 use super::error::{AtVariable, StudyFileError};
 use super::layout::{
@@ -69,4 +72,31 @@ pub(super) fn check_row(
             len,
         })
     }
+}
+
+/// Values a reader reads of a block of case rows at a time when it reads every row
+/// (8 bytes each: 8 MiB).
+pub(super) const READ_VALUES: usize = 1 << 20;
+
+/// Rows `rows` of each dataset of `datasets` (variables `specs`), one read each: a
+/// `[rows, values per row]` array per dataset (1-D datasets give one value per row).
+pub(super) fn read_blocks(
+    datasets: &[Dataset],
+    specs: &[VarSpec],
+    rows: Range<usize>,
+    path: &Path,
+) -> Result<Vec<Array2<f64>>, StudyFileError> {
+    datasets
+        .iter()
+        .zip(specs)
+        .map(|(ds, spec)| {
+            let block = if ds.ndim() == 1 {
+                let column = ds.read_slice_1d::<f64, _>(rows.clone());
+                column.map(|c| c.insert_axis(Axis(1)))
+            } else {
+                ds.read_slice_2d::<f64, _>((rows.clone(), ..))
+            };
+            block.at(path, &spec.name)
+        })
+        .collect()
 }

@@ -436,6 +436,12 @@ impl Layout {
             + self.order_spectra.len() * self.orders.len()
     }
 
+    /// The values of one case row: its series, spectra and metric values.
+    pub fn case_values(&self) -> usize {
+        let spectra: usize = self.spectrum_rows().map(|(_, n)| n).sum();
+        self.series.len() * self.times.len() + spectra + self.n_metric_values()
+    }
+
     /// The root attribute `name`, if the layout has one.
     pub fn attribute(&self, name: &str) -> Option<&AttrValue> {
         self.attributes

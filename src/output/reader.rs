@@ -1,13 +1,15 @@
 //! Reading a study file back: its layout, and cases one row at a time.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use hdf5::filters::Filter;
 use hdf5::types::TypeDescriptor;
 use hdf5::{Dataset, File, IndexType, IterationOrder};
+use ndarray::Array2;
 
 use super::attributes;
-use super::datasets::{check_row, RowDatasets};
+use super::datasets::{check_row, read_blocks, RowDatasets, READ_VALUES};
 use super::error::{AtVariable, StudyFileError};
 use super::guard::{self, Checked};
 use super::layout::{
@@ -91,32 +93,44 @@ impl StudyReader {
     /// error if that crashes or does not end, so that reading them here cannot crash.
     /// Errors the reads themselves report are left for them.
     pub fn check_cases(&self) -> Result<(), StudyFileError> {
+        self.check_reads().map(drop)
+    }
+
+    /// [`StudyReader::check_cases`], saying whether the child's reads also ended
+    /// without an error ([`Checked::Passed`]).
+    fn check_reads(&self) -> Result<Checked, StudyFileError> {
         let checked = guard::check(guard::deadline(&self.path, true), &self.path, || {
             // The child has closed the descriptors it inherited: it opens the file anew.
-            let r = Self::open_unchecked(&self.path)?;
-            (0..r.layout.n_references()).try_for_each(|k| r.read_reference(k).map(|_| ()))?;
-            (0..r.layout.n_cases()).try_for_each(|row| r.read_case(row).map(|_| ()))
+            Self::open_unchecked(&self.path)?.read_every_row()
         });
         match checked {
-            Checked::Survived => Ok(()),
             Checked::Crashed(reason) => Err(damaged(&self.path, reason)),
+            checked => Ok(checked),
         }
+    }
+
+    /// Reads every reference, then every case a block of rows at a time (about
+    /// [`READ_VALUES`] values per read).
+    fn read_every_row(&self) -> Result<(), StudyFileError> {
+        (0..self.layout.n_references()).try_for_each(|k| self.read_reference(k).map(drop))?;
+        let n = self.layout.n_cases();
+        let per_read = (READ_VALUES / self.layout.case_values().max(1)).max(1);
+        (0..n)
+            .step_by(per_read)
+            .try_for_each(|start| self.read_cases(start..(start + per_read).min(n)).map(drop))
     }
 
     /// Reads every value of the file's variables and so checks every checksum: the
     /// Fletcher-32 of every chunk (HDF5 checks it on reading) and the digest of every
     /// string variable (checked at open); then checks the chunk index holds every
     /// chunk the statuses say was written, each inside the file and none sharing
-    /// another's bytes (`output::structure`); the reads are first checked for crashes
-    /// ([`StudyReader::check_cases`]). Returns the variables that carry no checksum (a
-    /// netCDF tool's rewrite may drop them): none in a file studyrun wrote.
+    /// another's bytes (`output::structure`). The values are read in a child process
+    /// first ([`StudyReader::check_cases`]); only if its reads failed are they read
+    /// again here, to report the error. Returns the variables that carry no checksum
+    /// (a netCDF tool's rewrite may drop them): none in a file studyrun wrote.
     pub fn verify(&self) -> Result<Vec<String>, StudyFileError> {
-        self.check_cases()?;
-        for k in 0..self.layout.n_references() {
-            self.read_reference(k)?;
-        }
-        for row in 0..self.layout.n_cases() {
-            self.read_case(row)?;
+        if self.check_reads()? != Checked::Passed {
+            self.read_every_row()?;
         }
         structure::check_chunks(&self.file, &self.layout, &self.rows, &self.statuses()?)
             .map_err(|reason| damaged(&self.path, reason))?;
@@ -222,56 +236,64 @@ impl StudyReader {
     /// [`Layout::case_ids`]).
     pub fn read_case(&self, row: usize) -> Result<CaseData, StudyFileError> {
         check_row(&self.path, CASE, row, self.layout.n_cases())?;
-        let series = self.read_rows(&self.rows.series, &self.layout.series, row)?;
-        let mut spectra = self.read_rows(&self.rows.spectra, &self.layout.spectra, row)?;
-        spectra.extend(self.read_rows(&self.rows.kurtosis, &self.layout.kurtosis, row)?);
-        let mut metrics: Vec<f64> = self
-            .rows
-            .metrics
-            .iter()
-            .zip(&self.layout.metrics)
-            .map(|(ds, spec)| read_one::<f64>(ds, row).at(&self.path, &spec.name))
-            .collect::<Result<_, _>>()?;
-        let replicates = self.read_rows(
-            &self.rows.replicate_metrics,
-            &self.layout.replicate_metrics,
-            row,
-        )?;
-        metrics.extend(replicates.into_iter().flatten());
-        let revolutions = self.read_rows(
-            &self.rows.revolution_metrics,
-            &self.layout.revolution_metrics,
-            row,
-        )?;
-        metrics.extend(revolutions.into_iter().flatten());
-        let orders = self.read_rows(&self.rows.order_spectra, &self.layout.order_spectra, row)?;
-        metrics.extend(orders.into_iter().flatten());
-        let message = self.messages[row].clone();
-        let code = read_one::<i8>(&self.rows.status, row).at(&self.path, STATUS)?;
-        let status = self.status(code)?;
-        let replicate_messages = match status {
-            Status::Ok => self.replicate_messages(row)?.to_vec(),
-            _ => Vec::new(),
+        let mut case = self.read_cases(row..row + 1)?;
+        Ok(case.pop().expect("one row read"))
+    }
+
+    /// Reads rows `rows` of every `[case, ...]` variable, one HDF5 read per variable,
+    /// as [`StudyReader::read_case`] reads each of them.
+    pub fn read_cases(&self, rows: Range<usize>) -> Result<Vec<CaseData>, StudyFileError> {
+        match rows.clone().last() {
+            Some(last) => check_row(&self.path, CASE, last, self.layout.n_cases())?,
+            None => return Ok(Vec::new()),
+        }
+        let (l, d) = (&self.layout, &self.rows);
+        let read = |datasets: &[Dataset], specs: &[VarSpec]| {
+            read_blocks(datasets, specs, rows.clone(), &self.path)
         };
-        Ok(CaseData {
-            series,
-            spectra,
-            metrics,
-            status,
-            message,
-            replicate_messages,
-        })
+        let series = read(&d.series, &l.series)?;
+        let mut spectra = read(&d.spectra, &l.spectra)?;
+        spectra.extend(read(&d.kurtosis, &l.kurtosis)?);
+        let mut metrics = read(&d.metrics, &l.metrics)?;
+        metrics.extend(read(&d.replicate_metrics, &l.replicate_metrics)?);
+        metrics.extend(read(&d.revolution_metrics, &l.revolution_metrics)?);
+        metrics.extend(read(&d.order_spectra, &l.order_spectra)?);
+        let codes = (d.status.read_slice_1d::<i8, _>(rows.clone())).at(&self.path, STATUS)?;
+        let row_of = |blocks: &[Array2<f64>], k: usize| -> Vec<Vec<f64>> {
+            blocks.iter().map(|b| b.row(k).to_vec()).collect()
+        };
+        rows.enumerate()
+            .map(|(k, row)| {
+                let status = self.status(codes[k])?;
+                Ok(CaseData {
+                    series: row_of(&series, k),
+                    spectra: row_of(&spectra, k),
+                    metrics: metrics.iter().flat_map(|b| b.row(k)).copied().collect(),
+                    status,
+                    message: self.messages[row].clone(),
+                    replicate_messages: match status {
+                        Status::Ok => self.replicate_messages(row)?.to_vec(),
+                        _ => Vec::new(),
+                    },
+                })
+            })
+            .collect()
     }
 
     /// Reads row `row` of every `[reference, time]` variable, one vector per
     /// [`Layout::reference_series`].
     pub fn read_reference(&self, row: usize) -> Result<Vec<Vec<f64>>, StudyFileError> {
         check_row(&self.path, REFERENCE, row, self.layout.n_references())?;
-        self.read_rows(
+        let blocks = read_blocks(
             &self.rows.reference_series,
             &self.layout.reference_series,
-            row,
-        )
+            row..row + 1,
+            &self.path,
+        )?;
+        Ok(blocks
+            .into_iter()
+            .map(|b| b.into_raw_vec_and_offset().0)
+            .collect())
     }
 
     /// Why case row `row` failed (empty if it did not).
@@ -321,32 +343,6 @@ impl StudyReader {
             reason: format!("unknown status code {code}"),
         })
     }
-
-    fn read_rows(
-        &self,
-        datasets: &[Dataset],
-        specs: &[VarSpec],
-        row: usize,
-    ) -> Result<Vec<Vec<f64>>, StudyFileError> {
-        datasets
-            .iter()
-            .zip(specs)
-            .map(|(ds, spec)| {
-                ds.read_slice_1d::<f64, _>((row, ..))
-                    .map(|a| a.to_vec())
-                    .at(&self.path, &spec.name)
-            })
-            .collect()
-    }
-}
-
-/// Reads one element of a 1-D dataset.
-fn read_one<T: hdf5::H5Type + Clone>(ds: &Dataset, row: usize) -> hdf5::Result<T> {
-    let values = ds.read_slice_1d::<T, _>(row..row + 1)?;
-    values
-        .first()
-        .cloned()
-        .ok_or_else(|| hdf5::Error::from(format!("row {row} read nothing")))
 }
 
 /// The error of a file whose reading crashed (or hung) the check of `output::guard`.

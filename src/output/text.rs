@@ -23,6 +23,7 @@
 use std::collections::HashMap;
 use std::ffi::{c_void, CStr};
 use std::io::{Read, Seek, SeekFrom};
+use std::ops::Range;
 use std::sync::OnceLock;
 
 use crate::signal::{AttrValue, DESCRIPTIVE_ATTRIBUTES};
@@ -423,7 +424,7 @@ pub(super) struct GlobalHeap {
     addr_size: usize,
     size_size: usize,
     /// Collections read so far, by address.
-    collections: HashMap<u64, Vec<u8>>,
+    collections: HashMap<u64, Collection>,
 }
 
 impl GlobalHeap {
@@ -451,9 +452,8 @@ impl GlobalHeap {
         }
         let addr = le(&reference[4..4 + self.addr_size]);
         let index = le(&reference[4 + self.addr_size..]);
-        let size_size = self.size_size;
         let collection = self.collection(addr)?;
-        let data = object(collection, index, size_size).ok_or_else(|| {
+        let data = collection.object(index).ok_or_else(|| {
             format!(
                 "variable-length string: no object {index} in the global heap collection at {addr}"
             )
@@ -468,11 +468,12 @@ impl GlobalHeap {
         Ok(String::from_utf8_lossy(&bytes[..end]).into_owned())
     }
 
-    /// The bytes of the collection at HDF5 address `addr`, read and checked once.
-    fn collection(&mut self, addr: u64) -> Result<&[u8], String> {
+    /// The collection at HDF5 address `addr`, read, checked and indexed once.
+    fn collection(&mut self, addr: u64) -> Result<&Collection, String> {
         if !self.collections.contains_key(&addr) {
             let bytes = self.read_collection(addr)?;
-            self.collections.insert(addr, bytes);
+            let collection = Collection::new(bytes, self.size_size);
+            self.collections.insert(addr, collection);
         }
         Ok(&self.collections[&addr])
     }
@@ -510,31 +511,50 @@ impl GlobalHeap {
     }
 }
 
-/// The data of object `index` of a global heap collection (`bytes`, whole), whose
-/// length fields take `size_size` bytes; None if it is not there or does not fit.
-fn object(bytes: &[u8], index: u64, size_size: usize) -> Option<&[u8]> {
-    let align = |n: usize| n.checked_add(7).map(|n| n & !7);
-    // Collection header: signature, version, 3 reserved, collection size.
-    let mut p = align(8 + size_size)?;
-    // Object header: index u16, reference count u16, 4 reserved, object size.
-    let object_header = align(8 + size_size)?;
-    while p.checked_add(object_header)? <= bytes.len() {
-        let id = le(&bytes[p..p + 2]);
-        if id == 0 {
-            return None; // free space: the rest of the collection
+/// A global heap collection (its bytes, whole) and where each of its objects' data
+/// is, found in one pass: looking a string up costs the same however many objects
+/// the collection holds.
+struct Collection {
+    bytes: Vec<u8>,
+    /// The byte range of each object's data, by object index (the first object of an
+    /// index).
+    objects: HashMap<u64, Range<usize>>,
+}
+
+impl Collection {
+    /// Indexes the objects of `bytes`, whose length fields take `size_size` bytes. The
+    /// pass ends at free space (object index 0) or at an object that does not fit:
+    /// the objects after it are not there.
+    fn new(bytes: Vec<u8>, size_size: usize) -> Self {
+        let mut objects = HashMap::new();
+        let align = |n: usize| n.checked_add(7).map(|n| n & !7);
+        // Collection header: signature, version, 3 reserved, collection size; object
+        // header: index u16, reference count u16, 4 reserved, object size.
+        let (first, object_header) = (align(8 + size_size), align(8 + size_size));
+        let mut p = first;
+        while let (Some(at), Some(header)) = (p, object_header) {
+            if at.checked_add(header).is_none_or(|end| end > bytes.len()) {
+                break;
+            }
+            let id = le(&bytes[at..at + 2]);
+            let size = usize::try_from(le(&bytes[at + 8..at + 8 + size_size])).ok();
+            let data = at + header;
+            let Some(end) = size.and_then(|size| data.checked_add(size)) else {
+                break;
+            };
+            if id == 0 || end > bytes.len() {
+                break;
+            }
+            objects.entry(id).or_insert(data..end);
+            p = size.and_then(align).and_then(|size| data.checked_add(size));
         }
-        let size = usize::try_from(le(&bytes[p + 8..p + 8 + size_size])).ok()?;
-        let data = p + object_header;
-        let end = data.checked_add(size)?;
-        if end > bytes.len() {
-            return None;
-        }
-        if id == index {
-            return Some(&bytes[data..end]);
-        }
-        p = data.checked_add(align(size)?)?;
+        Self { bytes, objects }
     }
-    None
+
+    /// The data of object `index`; None if it is not there or does not fit.
+    fn object(&self, index: u64) -> Option<&[u8]> {
+        self.objects.get(&index).map(|r| &self.bytes[r.clone()])
+    }
 }
 
 /// A little-endian unsigned integer of up to 8 bytes (longer fields: their low 8 bytes).
@@ -566,13 +586,20 @@ mod tests {
         c
     }
 
+    /// Object `index` of the collection `c` with 8-byte lengths.
+    fn object(c: &[u8], index: u64) -> Option<Vec<u8>> {
+        Collection::new(c.to_vec(), 8)
+            .object(index)
+            .map(<[u8]>::to_vec)
+    }
+
     #[test]
     fn objects_are_found_by_index() {
         let c = collection(&[(1, b"ok"), (2, b"pending ok failed"), (7, b"")]);
-        assert_eq!(object(&c, 1, 8), Some(&b"ok"[..]));
-        assert_eq!(object(&c, 2, 8), Some(&b"pending ok failed"[..]));
-        assert_eq!(object(&c, 7, 8), Some(&b""[..]));
-        assert_eq!(object(&c, 3, 8), None);
+        assert_eq!(object(&c, 1), Some(b"ok".to_vec()));
+        assert_eq!(object(&c, 2), Some(b"pending ok failed".to_vec()));
+        assert_eq!(object(&c, 7), Some(b"".to_vec()));
+        assert_eq!(object(&c, 3), None);
     }
 
     #[test]
@@ -580,16 +607,16 @@ mod tests {
         // A zeroed object header (libhdf5 loops forever on it) is free space.
         let mut c = collection(&[(1, b"ok"), (2, b"x")]);
         c[16..32].fill(0);
-        assert_eq!(object(&c, 2, 8), None);
+        assert_eq!(object(&c, 2), None);
         // An object size running past the collection.
         let mut c = collection(&[(1, b"ok")]);
         c[24..32].copy_from_slice(&u64::MAX.to_le_bytes());
-        assert_eq!(object(&c, 1, 8), None);
+        assert_eq!(object(&c, 1), None);
         let mut c = collection(&[(1, b"ok")]);
         c[24..32].copy_from_slice(&5000u64.to_le_bytes());
-        assert_eq!(object(&c, 1, 8), None);
+        assert_eq!(object(&c, 1), None);
         // Too short for a header.
-        assert_eq!(object(&c[..20], 1, 8), None);
+        assert_eq!(object(&c[..20], 1), None);
     }
 
     #[test]
