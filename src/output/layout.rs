@@ -256,8 +256,9 @@ impl Role {
 /// metadata, parameter values, root attributes and storage options.
 ///
 /// Rows of every `[case, ...]` variable follow `case_ids`; rows of every
-/// `[reference, ...]` variable follow `reference_ids`.
-#[derive(Debug, Clone, PartialEq)]
+/// `[reference, ...]` variable follow `reference_ids`. The default is the empty
+/// layout: no cases, references, variables or attributes, default storage.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Layout {
     /// Global case ids (any distinct values up to [`MAX_ID`], not necessarily `0..n`);
     /// none for an empty shard.
@@ -668,23 +669,13 @@ mod tests {
             series: vec![VarSpec::new("x", "m", "position")],
             spectra: vec![VarSpec::new("x_spectrum", "m", "amplitude of x")],
             metrics: vec![VarSpec::new("x_rms", "m", "rms of x")],
-            replicates: vec![],
-            replicate_metrics: vec![],
-            revolutions: vec![],
-            revolution_metrics: vec![],
-            orders: vec![],
-            order_spectra: vec![],
-            sk_frequencies: Vec::new(),
-            kurtosis: Vec::new(),
             parameters: vec![Param {
                 spec: VarSpec::new("rpm", "min-1", "crank speed"),
                 values: ParamValues::F64(vec![300.0, 600.0]),
             }],
-            reference_parameters: vec![],
-            reference_series: vec![],
             reference_index: vec![0, 0],
             attributes: provenance(),
-            storage: Storage::default(),
+            ..Layout::default()
         }
     }
 

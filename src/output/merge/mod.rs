@@ -129,8 +129,8 @@ mod tests {
     use super::survey::without_cases;
     use super::*;
     use crate::output::{
-        provenance, AttrValue, CaseRecord, Param, ParamValues, Status, Storage, StudyReader,
-        StudyWriter, VarSpec,
+        provenance, AttrValue, CaseRecord, Param, ParamValues, Status, StudyReader, StudyWriter,
+        VarSpec,
     };
 
     /// The layout of a file of cases `ids` of a 7-case study (`shard` "K/3" or ""),
@@ -180,16 +180,7 @@ mod tests {
                 .collect(),
             reference_ids: refs,
             attributes,
-            storage: Storage::default(),
-            series: vec![],
-            replicates: vec![],
-            replicate_metrics: vec![],
-            revolutions: vec![],
-            revolution_metrics: vec![],
-            orders: vec![],
-            order_spectra: vec![],
-            sk_frequencies: vec![],
-            kurtosis: vec![],
+            ..Layout::default()
         }
     }
 
