@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use studyrun::output::StudyReader;
 
-use crate::common::{read_case_but_wall_time, studyrun_ok};
+use crate::common::{open_rw_unlocked, read_case_but_wall_time, studyrun_ok};
 
 pub(crate) fn studyrun(dir: &Path, args: &[&str]) -> Output {
     crate::common::command(env!("CARGO_BIN_EXE_studyrun"))
@@ -950,7 +950,7 @@ fn empty_shards_merge_and_unfinished_inputs_are_refused() {
 
 /// Writes `ids` into the `case` variable of the study file at `path`.
 fn set_case_ids(path: &Path, ids: &[i32]) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     file.dataset("case").unwrap().write(ids).unwrap();
 }
 

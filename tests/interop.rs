@@ -10,7 +10,7 @@
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
 
-use crate::common::studyrun_ok;
+use crate::common::{open_rw_unlocked, studyrun_ok};
 use hdf5::types::{TypeDescriptor, VarLenUnicode};
 use hdf5_sys::h5a::{
     H5Aclose, H5Acreate2, H5Adelete, H5Aexists, H5Aget_space, H5Aget_type, H5Aopen, H5Aread,
@@ -57,7 +57,7 @@ fn cname(name: &str) -> CString {
 /// a scalar fixed-length ASCII-typed string of exactly `bytes` (NULL dataspace if
 /// empty), as `ncatted -a name,obj,c,c,text` writes it.
 fn nc_char(path: &Path, obj: &str, name: &str, bytes: &[u8]) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     let ds = (obj != "/").then(|| file.dataset(obj).unwrap());
     let id = ds.as_ref().map_or(file.id(), |d| d.id());
     let name = cname(name);
@@ -88,7 +88,7 @@ fn nc_char(path: &Path, obj: &str, name: &str, bytes: &[u8]) {
 /// Adds root attribute `name` as a one-element variable-length UTF-8 string array
 /// (`ncatted -a name,global,c,sng,text`).
 fn string_array(path: &Path, name: &str, text: &str) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     let v: VarLenUnicode = text.parse().unwrap();
     file.new_attr_builder()
         .with_data(&[v])
@@ -98,7 +98,7 @@ fn string_array(path: &Path, name: &str, text: &str) {
 
 /// Adds root attribute `name` holding two numbers (`ncatted -a pair,global,c,d,"1,2"`).
 fn number_array(path: &Path, name: &str) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     file.new_attr_builder()
         .with_data(&[1.0f64, 2.0])
         .create(name)
@@ -158,7 +158,7 @@ unsafe fn one_element_arrays(obj: hid_t, names: &[String]) {
 /// `_NCProperties` (fixed-length, NUL-padded) on the root, `_Netcdf4Coordinates` (an
 /// int32 array) on every variable.
 fn netcdf_rewrite(path: &Path) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     let datasets = file.member_names().unwrap();
     locked(|| unsafe { one_element_arrays(file.id(), &file.attr_names().unwrap()) });
     for name in &datasets {
@@ -461,7 +461,7 @@ fn ids_are_int32_and_history_is_nc_char_with_the_merge_on_top() {
 
 /// Rewrites `time` of the file at `path` through `f(sample, time)`.
 fn rewrite_times(path: &Path, f: impl Fn(usize, f64) -> f64) {
-    let file = hdf5::File::open_rw(path).unwrap();
+    let file = open_rw_unlocked(path);
     let ds = file.dataset("time").unwrap();
     let times: Vec<f64> = ds.read_raw::<f64>().unwrap();
     let moved: Vec<f64> = times.iter().enumerate().map(|(j, &t)| f(j, t)).collect();

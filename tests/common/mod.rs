@@ -108,6 +108,18 @@ pub fn studyrun_ok(dir: &Path, args: &[&str]) -> Output {
     out
 }
 
+/// Opens the HDF5 file at `path` read-write without libhdf5's file lock, for a test's
+/// edits in place. Other test threads spawn studyrun processes, which inherit
+/// libhdf5's descriptors (opened without close-on-exec) and, with a descriptor, the
+/// lock of a file this thread has since closed: a second locked open of that file
+/// fails while such a process runs.
+pub fn open_rw_unlocked(path: &Path) -> hdf5::File {
+    hdf5::File::with_options()
+        .with_fapl(|fapl| fapl.file_locking(false))
+        .open_rw(path)
+        .unwrap()
+}
+
 /// Closed-form kinematics of the ideal slider-crank at crank angle `th` (rad) and
 /// constant speed `w` (rad/s): positions, velocities and accelerations of the
 /// crank, rod and slider centres of mass, and the rod's angle, rate and
