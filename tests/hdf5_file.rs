@@ -14,7 +14,7 @@ use studyrun::output::{
 use studyrun::signal::spectrum::{frequencies, SpectrumPlan, Window};
 use studyrun::simulate::CHANNELS;
 
-use crate::common::bits;
+use crate::common::{bits, create_unlocked};
 
 const N_TIME: usize = 1001;
 const SAMPLE_RATE: f64 = 1000.0;
@@ -553,7 +553,7 @@ fn errors_name_the_file_and_the_variable() {
     );
 
     let plain = dir.path().join("plain.h5");
-    hdf5::File::create(&plain).unwrap();
+    create_unlocked(&plain);
     let err = StudyReader::open(&plain).unwrap_err().to_string();
     assert!(
         err.contains("plain.h5") && err.contains("studyrun_file_format"),
@@ -562,8 +562,7 @@ fn errors_name_the_file_and_the_variable() {
     // A study file of another format version: named as such, and `--force` may
     // replace it (it is a study file), unlike the plain HDF5 file.
     let older = dir.path().join("older.h5");
-    hdf5::File::create(&older)
-        .unwrap()
+    create_unlocked(&older)
         .new_attr::<i64>()
         .create("studyrun_file_format")
         .unwrap()
@@ -704,7 +703,7 @@ fn write_encoded_file(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
 /// The same rows written by HDF5's own filter pipeline (shuffle + deflate, or none;
 /// then Fletcher-32).
 fn write_through_hdf5_filters(path: &Path, storage: Storage, rows: &[Vec<f64>]) {
-    let file = hdf5::File::create(path).unwrap();
+    let file = create_unlocked(path);
     let n = rows[0].len();
     let mut builder = file
         .new_dataset::<f64>()

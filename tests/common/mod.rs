@@ -114,10 +114,20 @@ pub fn studyrun_ok(dir: &Path, args: &[&str]) -> Output {
 /// lock of a file this thread has since closed: a second locked open of that file
 /// fails while such a process runs.
 pub fn open_rw_unlocked(path: &Path) -> hdf5::File {
-    hdf5::File::with_options()
-        .with_fapl(|fapl| fapl.file_locking(false))
-        .open_rw(path)
-        .unwrap()
+    unlocked().open_rw(path).unwrap()
+}
+
+/// Creates the HDF5 file at `path` without libhdf5's file lock (see
+/// [`open_rw_unlocked`]), for a test that reads it again.
+pub fn create_unlocked(path: &Path) -> hdf5::File {
+    unlocked().create(path).unwrap()
+}
+
+/// File options without libhdf5's file lock.
+fn unlocked() -> hdf5::FileBuilder {
+    let mut options = hdf5::File::with_options();
+    options.with_fapl(|fapl| fapl.file_locking(false));
+    options
 }
 
 /// Closed-form kinematics of the ideal slider-crank at crank angle `th` (rad) and
