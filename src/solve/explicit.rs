@@ -5,6 +5,7 @@
 use super::control::{initial_step, next_step, StepController, Tolerance, Verdict, NON_FINITE_CUT};
 use super::eval::{accept, eval, first_non_finite, Problem};
 use super::output::{Samples, StepEnds};
+use super::sums::{combine, weighted_sum, SparseRows};
 use super::switch::{end_step, settle, ChatterWatch};
 use super::tableau::{DenseOutput, ExplicitTableau, RK4};
 use super::{OdeSystem, SolveError, Stats};
@@ -39,6 +40,8 @@ struct Workspace {
     margins: Vec<f64>,
     /// State at a located event.
     y_event: Vec<f64>,
+    /// The nonzero weights of the tableau's rows.
+    rows: SparseRows,
 }
 
 impl Workspace {
@@ -56,6 +59,7 @@ impl Workspace {
             cont: vec![0.0; rows * n],
             margins: vec![f64::INFINITY; tab.all_stages()],
             y_event: vec![0.0; n],
+            rows: SparseRows::new(tab),
         }
     }
 }
@@ -77,84 +81,6 @@ enum StepOutcome {
     ModelFailed(SolveError),
 }
 
-/// `out[m] = base[m] + h Σ_j w_j k_j[m]` for every component `m` (`base` absent:
-/// just the increment), with weights `w` over the stage-major slopes `k` of `n`
-/// components each.
-///
-/// The sum runs over the stages outermost, four components side by side in registers
-/// (independent add chains instead of one serial chain per component); each component
-/// still adds its terms in stage order from `-0.0`, so the result is the same as the
-/// plain per-component sum, bit for bit.
-fn weighted_sum<W>(h: f64, w: W, k: &[f64], n: usize, base: Option<&[f64]>, out: &mut [f64])
-where
-    W: Iterator<Item = f64> + Clone,
-{
-    // A state of exactly four components (the production model's): the slopes as
-    // rows of four, with no index arithmetic or bounds checks per term.
-    if let (Ok(out), LANES) = (<&mut [f64; LANES]>::try_from(&mut *out), n) {
-        let rows = k.chunks_exact(LANES);
-        let mut acc = [-0.0; LANES];
-        for (wj, row) in w.zip(rows) {
-            for (a, kj) in acc.iter_mut().zip(row) {
-                *a += wj * kj;
-            }
-        }
-        finish(h, acc, base, 0, out);
-        return;
-    }
-    let mut m0 = 0;
-    let mut chunks = out.chunks_exact_mut(LANES);
-    for chunk in &mut chunks {
-        components::<LANES, W>(h, w.clone(), k, n, base, m0, chunk);
-        m0 += LANES;
-    }
-    for o in chunks.into_remainder().chunks_exact_mut(1) {
-        components::<1, W>(h, w.clone(), k, n, base, m0, o);
-        m0 += 1;
-    }
-}
-
-/// Components kept side by side by [`weighted_sum`].
-const LANES: usize = 4;
-
-/// [`weighted_sum`] for the `L` components `m0 .. m0 + L` (a fixed-size accumulator,
-/// so it lives in registers).
-#[inline(always)]
-fn components<const L: usize, W: Iterator<Item = f64>>(
-    h: f64,
-    w: W,
-    k: &[f64],
-    n: usize,
-    base: Option<&[f64]>,
-    m0: usize,
-    out: &mut [f64],
-) {
-    let mut acc = [-0.0; L];
-    for (j, wj) in w.enumerate() {
-        let row = &k[j * n + m0..][..L];
-        for (a, kj) in acc.iter_mut().zip(row) {
-            *a += wj * kj;
-        }
-    }
-    finish(h, acc, base, m0, out);
-}
-
-/// `out[l] = base[m0 + l] + h acc[l]` (`base` absent: `h acc[l]`).
-#[inline(always)]
-fn finish<const L: usize>(h: f64, acc: [f64; L], base: Option<&[f64]>, m0: usize, out: &mut [f64]) {
-    for (l, (o, a)) in out.iter_mut().zip(acc).enumerate() {
-        *o = match base {
-            Some(b) => b[m0 + l] + h * a,
-            None => h * a,
-        };
-    }
-}
-
-/// `out = y + h Σ_j w_j k_j` over the stage-major slopes `k`.
-fn combine(y: &[f64], h: f64, weights: &[f64], k: &[f64], out: &mut [f64]) {
-    weighted_sum(h, weights.iter().copied(), k, y.len(), Some(y), out);
-}
-
 /// Stage `i` of a step of size `h` (s) from `(t, y)`, with node `c` and row `a` of
 /// the tableau: writes its state `y + h Σ_j a_j k_j` into `state` and evaluates
 /// `k_i = f(t + c h, state)`; the slopes `k_0 … k_{i−1}` are already in `k`. A
@@ -164,7 +90,7 @@ fn combine(y: &[f64], h: f64, weights: &[f64], k: &[f64], out: &mut [f64]) {
 fn stage<S: OdeSystem>(
     sys: &mut S,
     (t, h): (f64, f64),
-    (c, a): (f64, &[f64]),
+    (c, a): (f64, &[(usize, f64)]),
     y: &[f64],
     k: &mut [f64],
     i: usize,
@@ -204,7 +130,7 @@ fn take_step<S: OdeSystem>(
         let outcome = stage(
             sys,
             (t, h),
-            (tab.c[i], tab.a[i]),
+            (tab.c[i], w.rows.stage(i)),
             &w.y,
             &mut w.k,
             i,
@@ -217,7 +143,7 @@ fn take_step<S: OdeSystem>(
         w.margins[i] = sys.margin();
     }
     if !tab.fsal {
-        combine(&w.y, h, tab.b, &w.k, &mut w.y_new);
+        combine(&w.y, h, w.rows.b(), &w.k, &mut w.y_new);
         if let Some(index) = first_non_finite(&w.y_new) {
             return StepOutcome::NonFinite { t: t + h, index };
         }
@@ -231,12 +157,12 @@ fn take_step<S: OdeSystem>(
 /// `h Σ (b_i − b̂₃_i) k_i`. Non-finite when a slope is.
 fn error_norm(tab: &ExplicitTableau, tol: Tolerance, h: f64, w: &mut Workspace) -> f64 {
     let n = w.n;
-    weighted_sum(h, tab.e.iter().copied(), &w.k, n, None, &mut w.scratch);
+    weighted_sum(h, tab.e.iter().copied().enumerate(), &w.k, n, None, &mut w.scratch);
     let err = tol.norm(&w.scratch, &w.y, &w.y_new);
     if tab.b_hat_low.is_empty() {
         return err;
     }
-    let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh);
+    let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh).enumerate();
     weighted_sum(h, weights, &w.k, n, None, &mut w.scratch);
     let err_low = tol.norm(&w.scratch, &w.y, &w.y_new);
     let denominator = err * err + 0.01 * err_low * err_low;
@@ -259,11 +185,11 @@ fn prepare_dense<S: OdeSystem>(
     stats: &mut Stats,
 ) -> StepOutcome {
     let (n, s) = (w.n, tab.stages());
-    for (x, (&c, &a)) in dense.c.iter().zip(dense.a).enumerate() {
+    for (x, &c) in dense.c.iter().enumerate() {
         let outcome = stage(
             sys,
             (t, h),
-            (c, a),
+            (c, w.rows.extra_stage(x)),
             &w.y,
             &mut w.k,
             s + x,
@@ -275,8 +201,8 @@ fn prepare_dense<S: OdeSystem>(
         }
         w.margins[s + x] = sys.margin();
     }
-    for (row, d) in w.cont.chunks_exact_mut(n).zip(dense.d) {
-        weighted_sum(h, d.iter().copied(), &w.k, n, None, row);
+    for (j, row) in w.cont.chunks_exact_mut(n).enumerate() {
+        weighted_sum(h, w.rows.dense_term(j).iter().copied(), &w.k, n, None, row);
     }
     StepOutcome::Done
 }
@@ -769,44 +695,4 @@ where
         std::mem::swap(&mut w.y, &mut w.y_new);
     }
     Ok(stats)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The side-by-side sums equal the plain per-component sums bit for bit, for state
-    /// sizes with and without a remainder after the groups of four (and of exactly four,
-    /// which has its own path), with and without a
-    /// base, and for every stage count of DOP853 and its dense output.
-    #[test]
-    fn weighted_sums_equal_the_plain_sums_bit_for_bit() {
-        let mut x = 0.618_033_988_749_895_f64;
-        let mut next = move || {
-            x = (x * 9_301.0 + 0.497).fract();
-            (x - 0.5) * 10f64.powi((x * 1e4) as i32 % 9 - 4)
-        };
-        for n in 1..=11 {
-            for stages in [1, 4, 7, 12, 16] {
-                let k: Vec<f64> = (0..stages * n).map(|_| next()).collect();
-                let w: Vec<f64> = (0..stages).map(|_| next()).collect();
-                let base: Vec<f64> = (0..n).map(|_| next()).collect();
-                let h = next().abs() + 1e-6;
-                for with_base in [false, true] {
-                    let mut out = vec![0.0; n];
-                    let b = with_base.then_some(base.as_slice());
-                    weighted_sum(h, w.iter().copied(), &k, n, b, &mut out);
-                    for (m, got) in out.iter().enumerate() {
-                        let sum: f64 = w.iter().enumerate().map(|(j, wj)| wj * k[j * n + m]).sum();
-                        let want = if with_base {
-                            base[m] + h * sum
-                        } else {
-                            h * sum
-                        };
-                        assert_eq!(got.to_bits(), want.to_bits(), "n {n} stages {stages} m {m}");
-                    }
-                }
-            }
-        }
-    }
 }

@@ -350,6 +350,7 @@ mod eval;
 mod explicit;
 mod output;
 mod sdirk;
+mod sums;
 mod switch;
 mod tableau;
 mod validate;
