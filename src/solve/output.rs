@@ -124,15 +124,22 @@ impl StepEnds<'_> {
             *wj = w;
         }
         let weights = &weights[..3 + rows];
-        // A state of exactly four components (the production model's): fixed-size
-        // rows, so the component loop has no bounds checks.
+        // A state of exactly four components (the production model's): the four
+        // side by side, term by term, each in the order of [`nested`].
         if let Ok(out) = <&mut [f64; 4]>::try_from(&mut *out) {
             let ends = [self.y0, self.y1, self.f0, self.f1].map(<&[f64; 4]>::try_from);
             if let [Ok(y0), Ok(y1), Ok(f0), Ok(f1)] = ends {
-                let higher = higher.chunks_exact(4);
-                for (i, o) in out.iter_mut().enumerate() {
-                    let terms = higher.clone().map(|row| row[i]);
-                    *o = nested(weights, h, [y0[i], y1[i], f0[i], f1[i]], terms);
+                let mut acc = [0.0; 4];
+                for (i, a) in acc.iter_mut().enumerate() {
+                    *a = hermite_terms(weights, h, [y0[i], y1[i], f0[i], f1[i]]);
+                }
+                for (wr, row) in weights[3..].iter().zip(higher.as_chunks::<4>().0) {
+                    for (a, f) in acc.iter_mut().zip(row) {
+                        *a += wr * f;
+                    }
+                }
+                for ((o, y), a) in out.iter_mut().zip(y0).zip(acc) {
+                    *o = y + a;
                 }
                 return;
             }
@@ -155,15 +162,21 @@ fn nested(
     [y0, y1, f0, f1]: [f64; 4],
     higher: impl Iterator<Item = f64>,
 ) -> f64 {
-    let delta = y1 - y0;
-    let hf0 = h * f0;
-    let hf1 = h * f1;
-    let mut acc =
-        weights[0] * delta + weights[1] * (hf0 - delta) + weights[2] * (2.0 * delta - hf0 - hf1);
+    let mut acc = hermite_terms(weights, h, [y0, y1, f0, f1]);
     for (wr, f) in weights[3..].iter().zip(higher) {
         acc += wr * f;
     }
     y0 + acc
+}
+
+/// The cubic Hermite part `w0 F0 + w1 F1 + w2 F2` of one component of
+/// [`StepEnds::continuous`], from its `[y0, y1, f0, f1]` at the ends of step `h` (s).
+#[inline(always)]
+fn hermite_terms(weights: &[f64], h: f64, [y0, y1, f0, f1]: [f64; 4]) -> f64 {
+    let delta = y1 - y0;
+    let hf0 = h * f0;
+    let hf1 = h * f1;
+    weights[0] * delta + weights[1] * (hf0 - delta) + weights[2] * (2.0 * delta - hf0 - hf1)
 }
 
 /// Most higher terms `F_{3+j}` a continuous extension has (DOP853: 4).
