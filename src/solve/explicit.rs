@@ -157,12 +157,24 @@ fn take_step<S: OdeSystem>(
 /// `h Σ (b_i − b̂₃_i) k_i`. Non-finite when a slope is.
 fn error_norm(tab: &ExplicitTableau, tol: Tolerance, h: f64, w: &mut Workspace) -> f64 {
     let n = w.n;
-    weighted_sum(h, tab.e.iter().copied().enumerate(), &w.k, n, None, &mut w.scratch);
+    weighted_sum(
+        h,
+        tab.e.iter().copied().enumerate(),
+        &w.k,
+        n,
+        None,
+        &mut w.scratch,
+    );
     let err = tol.norm(&w.scratch, &w.y, &w.y_new);
     if tab.b_hat_low.is_empty() {
         return err;
     }
-    let weights = tab.b.iter().zip(tab.b_hat_low).map(|(b, bh)| b - bh).enumerate();
+    let weights = tab
+        .b
+        .iter()
+        .zip(tab.b_hat_low)
+        .map(|(b, bh)| b - bh)
+        .enumerate();
     weighted_sum(h, weights, &w.k, n, None, &mut w.scratch);
     let err_low = tol.norm(&w.scratch, &w.y, &w.y_new);
     let denominator = err * err + 0.01 * err_low * err_low;

@@ -186,8 +186,12 @@ mod tests {
                 let w: Vec<f64> = (0..stages)
                     .map(|j| if j % 3 == 1 { 0.0 } else { next() })
                     .collect();
-                let pairs: Vec<(usize, f64)> =
-                    w.iter().copied().enumerate().filter(|p| p.1 != 0.0).collect();
+                let pairs: Vec<(usize, f64)> = w
+                    .iter()
+                    .copied()
+                    .enumerate()
+                    .filter(|p| p.1 != 0.0)
+                    .collect();
                 let base: Vec<f64> = (0..n).map(|_| next()).collect();
                 let h = next().abs() + 1e-6;
                 for with_base in [false, true] {
@@ -212,9 +216,16 @@ mod tests {
     #[test]
     fn sparse_rows_hold_the_nonzero_weights_of_each_row() {
         let sparse = SparseRows::new(&DOP853);
-        let dense = DOP853.dense.as_ref().expect("DOP853 has a continuous extension");
+        let dense = DOP853
+            .dense
+            .as_ref()
+            .expect("DOP853 has a continuous extension");
         let nonzero = |row: &[f64]| -> Vec<(usize, f64)> {
-            row.iter().copied().enumerate().filter(|p| p.1 != 0.0).collect()
+            row.iter()
+                .copied()
+                .enumerate()
+                .filter(|p| p.1 != 0.0)
+                .collect()
         };
         for (i, row) in DOP853.a.iter().enumerate() {
             assert_eq!(sparse.stage(i), nonzero(row), "stage {i}");
@@ -226,10 +237,22 @@ mod tests {
         for (j, row) in dense.d.iter().enumerate() {
             assert_eq!(sparse.dense_term(j), nonzero(row), "dense term {j}");
         }
-        let total: usize = DOP853.a.iter().chain(dense.a).chain(dense.d).map(|r| r.len()).sum();
-        let kept: usize = (0..DOP853.stages()).map(|i| sparse.stage(i).len()).sum::<usize>()
-            + (0..dense.a.len()).map(|x| sparse.extra_stage(x).len()).sum::<usize>()
-            + (0..dense.d.len()).map(|j| sparse.dense_term(j).len()).sum::<usize>();
+        let total: usize = DOP853
+            .a
+            .iter()
+            .chain(dense.a)
+            .chain(dense.d)
+            .map(|r| r.len())
+            .sum();
+        let kept: usize = (0..DOP853.stages())
+            .map(|i| sparse.stage(i).len())
+            .sum::<usize>()
+            + (0..dense.a.len())
+                .map(|x| sparse.extra_stage(x).len())
+                .sum::<usize>()
+            + (0..dense.d.len())
+                .map(|j| sparse.dense_term(j).len())
+                .sum::<usize>();
         assert_eq!((total, total - kept), (184, 54), "weights, zeros");
     }
 }
