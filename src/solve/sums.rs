@@ -22,8 +22,8 @@ const LANES: usize = 4;
 pub(super) struct SparseRows {
     /// Every row's pairs, row after row.
     terms: Vec<(usize, f64)>,
-    /// Where each row ends in `terms`.
-    ends: Vec<usize>,
+    /// Where each row starts in `terms`, and after the last, where it ends.
+    starts: Vec<usize>,
     /// Number of step stages (rows of `a` of the step, the first of them empty).
     stages: usize,
     /// Number of extra stages of the continuous extension.
@@ -37,15 +37,15 @@ impl SparseRows {
             tab.dense.as_ref().map_or((&[], &[]), |d| (d.a, d.d));
         let rows = tab.a.iter().chain([&tab.b]).chain(extra_a).chain(d);
         let mut terms = Vec::new();
-        let mut ends = Vec::new();
+        let mut starts = vec![0];
         for row in rows {
             let nonzero = row.iter().copied().enumerate().filter(|&(_, w)| w != 0.0);
             terms.extend(nonzero);
-            ends.push(terms.len());
+            starts.push(terms.len());
         }
         Self {
             terms,
-            ends,
+            starts,
             stages: tab.stages(),
             extra: extra_a.len(),
         }
@@ -53,8 +53,7 @@ impl SparseRows {
 
     /// Row `r` of all rows.
     fn row(&self, r: usize) -> &[(usize, f64)] {
-        let start = r.checked_sub(1).map_or(0, |p| self.ends[p]);
-        &self.terms[start..self.ends[r]]
+        &self.terms[self.starts[r]..self.starts[r + 1]]
     }
 
     /// The nonzero weights of stage `i`'s row of `a`.
