@@ -88,6 +88,24 @@ fn runs_a_study_and_refuses_to_overwrite_without_force() {
     );
 }
 
+/// `--force` asks of a file only that it is a study file (its format attribute): one
+/// whose case variables were damaged is replaced like any other, and the new file
+/// reads back whole.
+#[test]
+fn force_replaces_a_damaged_study_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "small.yaml", SMALL);
+    studyrun_ok(dir.path(), &["small.yaml", "-q"]);
+    let path = dir.path().join("small.h5");
+    open_rw_unlocked(&path).unlink("status").unwrap();
+    let damaged = StudyReader::open(&path).expect_err("a file without `status` is refused");
+    assert!(damaged.to_string().contains("status"), "{damaged}");
+    studyrun_ok(dir.path(), &["small.yaml", "--force", "-q"]);
+    let reader = StudyReader::open(&path).unwrap();
+    reader.check_cases().unwrap();
+    assert_eq!(reader.layout().n_cases(), 12);
+}
+
 #[test]
 fn invalid_grid_exits_2_naming_the_place() {
     let dir = tempfile::tempdir().unwrap();

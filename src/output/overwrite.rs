@@ -7,16 +7,21 @@
 //!   either (it is written in place);
 //! - it is none of the command's inputs (the grid file, a shard), compared by device
 //!   and inode, so another spelling of the same path is caught;
-//! - `--force` replaces only a studyrun study file (one [`StudyReader::open`] opens:
-//!   an HDF5 file with the `studyrun_file_format` root attribute); anything else is
-//!   refused and left as it is.
+//! - `--force` replaces only a studyrun study file (an HDF5 file with the
+//!   `studyrun_file_format` root attribute, of any format version, read as
+//!   [`StudyReader::open`] reads it: first in a child process, so that a file that
+//!   crashes libhdf5 is refused, not the command); anything else is refused and left
+//!   as it is. Nothing else of the file is read: the check costs the same for a file
+//!   of any size.
 
 use std::fs::Metadata;
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::Path;
 
+use super::guard::{self, Checked};
+use super::reader::{check_format_version, damaged, open_hdf5};
 use super::OutputError;
-use crate::output::{StudyFileError, StudyReader};
+use crate::output::StudyFileError;
 
 /// What kind of thing `m` is, for messages.
 fn kind(m: &Metadata) -> &'static str {
@@ -88,7 +93,7 @@ pub fn check_path(path: &Path, what: &str, inputs: &[&Path]) -> Result<bool, Out
 /// Checks that the regular file at `output` is a studyrun study file, the only kind
 /// `--force` replaces.
 pub fn check_replaceable(output: &Path) -> Result<(), OutputError> {
-    match StudyReader::open(output) {
+    match identify(output) {
         // One of an older or newer studyrun is a study file too.
         Ok(_) | Err(StudyFileError::Version { .. }) => Ok(()),
         Err(e) => Err(OutputError::Refused(format!(
@@ -147,6 +152,18 @@ pub fn side_files(output: &Path) -> [(std::path::PathBuf, &'static str); 5] {
         (DataFile::Resumed.path(output), "the resumed partial file"),
         (with_suffix(output, ".lock"), "the lock file"),
     ]
+}
+
+/// Whether `path` is a study file of this format version (a study file of another
+/// gives [`StudyFileError::Version`]): its format attribute read in a child process
+/// ([`guard::check`]), and here only if the child's read failed, for the error.
+fn identify(path: &Path) -> Result<(), StudyFileError> {
+    let read = || open_hdf5(path).and_then(|file| check_format_version(&file, path));
+    match guard::check(guard::deadline(path, false), path, read) {
+        Checked::Passed => Ok(()),
+        Checked::Survived => read(),
+        Checked::Crashed(reason) => Err(damaged(path, reason)),
+    }
 }
 
 /// The first line of `text` (HDF5 errors can run over several).

@@ -172,36 +172,8 @@ impl StudyReader {
 
     /// [`StudyReader::open`] without the check in a child process.
     pub(super) fn open_unchecked(path: &Path) -> Result<Self, StudyFileError> {
+        let file = open_hdf5(path)?;
         let path = path.to_owned();
-        let not_hdf5 = |reason: String| StudyFileError::NotHdf5 {
-            path: path.clone(),
-            reason,
-        };
-        match std::fs::metadata(&path) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                return Err(not_hdf5("does not exist".into()))
-            }
-            Err(e) => return Err(not_hdf5(format!("cannot be read: {e}"))),
-            Ok(m) if m.is_dir() => return Err(not_hdf5("is a directory, not a study file".into())),
-            // libhdf5 would wait for a FIFO's writer for ever.
-            Ok(m) if !m.is_file() => {
-                return Err(not_hdf5(
-                    "is not a regular file (a FIFO, device or socket), not a study file".into(),
-                ))
-            }
-            Ok(_) => {}
-        }
-        // The metadata cache bounded as the writer's: an open file's memory does not
-        // grow with the chunks read.
-        let opened = File::with_options()
-            .with_fapl(|p| p.mdc_config(&super::writer::bounded_metadata_cache()))
-            .open(&path);
-        let file = match opened {
-            Err(e) if e.to_string().contains("file signature not found") => {
-                return Err(not_hdf5("is not an HDF5 file (no HDF5 signature)".into()))
-            }
-            opened => opened.at(&path, "/")?,
-        };
         let layout = read_layout(&file, &path)?;
         let rows = RowDatasets::open(&file, &layout, &path)?;
         let messages = read_messages(&rows.error_message, layout.n_cases(), &path)?;
@@ -346,7 +318,7 @@ impl StudyReader {
 }
 
 /// The error of a file whose reading crashed (or hung) the check of `output::guard`.
-fn damaged(path: &Path, reason: String) -> StudyFileError {
+pub(super) fn damaged(path: &Path, reason: String) -> StudyFileError {
     StudyFileError::Format {
         path: path.to_owned(),
         variable: "/".to_owned(),
@@ -401,6 +373,39 @@ fn read_ids(file: &File, name: &str, path: &Path) -> Result<Vec<u64>, StudyFileE
         }
     };
     Ok(ids)
+}
+
+/// Opens the HDF5 file at `path` for reading, refusing what is not a regular file or
+/// has no HDF5 signature; the metadata cache bounded as the writer's, so an open
+/// file's memory does not grow with the chunks read.
+pub(super) fn open_hdf5(path: &Path) -> Result<File, StudyFileError> {
+    let not_hdf5 = |reason: String| StudyFileError::NotHdf5 {
+        path: path.to_owned(),
+        reason,
+    };
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(not_hdf5("does not exist".into()))
+        }
+        Err(e) => return Err(not_hdf5(format!("cannot be read: {e}"))),
+        Ok(m) if m.is_dir() => return Err(not_hdf5("is a directory, not a study file".into())),
+        // libhdf5 would wait for a FIFO's writer for ever.
+        Ok(m) if !m.is_file() => {
+            return Err(not_hdf5(
+                "is not a regular file (a FIFO, device or socket), not a study file".into(),
+            ))
+        }
+        Ok(_) => {}
+    }
+    let opened = File::with_options()
+        .with_fapl(|p| p.mdc_config(&super::writer::bounded_metadata_cache()))
+        .open(path);
+    match opened {
+        Err(e) if e.to_string().contains("file signature not found") => {
+            Err(not_hdf5("is not an HDF5 file (no HDF5 signature)".into()))
+        }
+        opened => opened.at(path, "/"),
+    }
 }
 
 /// Rebuilds the [`Layout`] of an open study file at `path`.
@@ -460,7 +465,7 @@ fn format_error(path: &Path) -> impl Fn(String, &str) -> StudyFileError + '_ {
 }
 
 /// Refuses a file without this build's study file format attribute.
-fn check_format_version(file: &File, path: &Path) -> Result<(), StudyFileError> {
+pub(super) fn check_format_version(file: &File, path: &Path) -> Result<(), StudyFileError> {
     let format = format_error(path);
     match attributes::read(file, FORMAT_ATTR) {
         Ok(AttrValue::I64(FORMAT_VERSION)) => {}
