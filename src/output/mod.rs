@@ -81,6 +81,7 @@ mod reserve;
 mod shuffle;
 mod structure;
 mod text;
+mod writeback;
 mod writer;
 
 pub use dimension_scales::ScaleError;

@@ -22,6 +22,7 @@ use super::layout::{
 use super::reader::{read_layout, StudyReader};
 use super::reserve::Reservation;
 use super::text;
+use super::writeback::Writeback;
 
 mod create;
 mod parameters;
@@ -143,6 +144,8 @@ pub struct StudyWriter {
     scalars: Scalars,
     /// Disk blocks reserved for the chunks [`StudyWriter::write_encoded`] appends.
     reservation: Reservation,
+    /// The write-out of those chunks, started as they are written.
+    writeback: Writeback,
     /// The parameter rows written so far of a file made by
     /// [`StudyWriter::create_unfilled`]; none for any other.
     unfilled: Option<Unfilled>,
@@ -290,6 +293,7 @@ impl StudyWriter {
         let scalars = Scalars::read(&rows, &layout, &path)?;
         Ok(Self {
             reservation: Reservation::new(&path),
+            writeback: Writeback::new(&path),
             path,
             file,
             encoder: ChunkEncoder::new(layout.storage),
@@ -341,7 +345,8 @@ impl StudyWriter {
     /// Writes `record`, whose series and spectra are stored chunks made by a
     /// [`ChunkEncoder`] for this file's storage, into row `row` like
     /// [`StudyWriter::write_case`]: the chunks go into the file unchanged, into disk
-    /// blocks reserved ahead of them (`fallocate` where the system has it). Returns
+    /// blocks reserved ahead of them (`fallocate` where the system has it), and their
+    /// write-out to the disk started (`output::writeback`). Returns
     /// the file's length before they were written ([`StudyWriter::file_len`]): the
     /// chunks follow it, which is what a crash journal records to find them again.
     pub fn write_encoded(
@@ -357,6 +362,7 @@ impl StudyWriter {
             write_row_chunk(ds, row, chunk).at(&self.path, &spec.name)?;
         }
         self.scalars.set(row, record)?;
+        self.writeback.start(before, self.file_len() - before);
         Ok(before)
     }
 
