@@ -9,10 +9,10 @@
 //!   and inode, so another spelling of the same path is caught;
 //! - `--force` replaces only a studyrun study file (an HDF5 file with the
 //!   `studyrun_file_format` root attribute, of any format version, read as
-//!   [`StudyReader::open`] reads it: first in a child process, so that a file that
-//!   crashes libhdf5 is refused, not the command); anything else is refused and left
-//!   as it is. Nothing else of the file is read: the check costs the same for a file
-//!   of any size.
+//!   [`StudyReader::open`](crate::output::StudyReader::open) reads it: first in a
+//!   child process, so that a file that crashes libhdf5 is refused, not the command);
+//!   anything else is refused and left as it is. Nothing else of the file is read: the
+//!   check costs the same for a file of any size.
 
 use std::fs::Metadata;
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
