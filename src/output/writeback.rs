@@ -1,10 +1,11 @@
 //! A study file's bytes sent on to the disk while the run goes on.
 //!
 //! A run publishes its file only once every byte of it is on the disk: an `fsync`,
-//! then the rename (`paths::publish_durably`). That `fsync` waits for every byte still
-//! in the page cache; for a short study it was most of what the file cost (18 ms of
-//! a 0.28 s run of 16 cases writing 25 MB, on this project's host). So the writer
-//! starts the write-out of each case's chunks as soon as they are in the file
+//! then the rename (`paths::rename_durably`). That `fsync` waits for every byte still
+//! in the page cache, which for a short study is most of what its file costs (18 ms of
+//! a 0.28 s run of 16 cases writing 25 MB, on this project's host, when all of it is
+//! left to the end). So the writer starts the write-out of each case's chunks as soon
+//! as they are in the file
 //! (`sync_file_range(SYNC_FILE_RANGE_WRITE)`, which queues the dirty pages and
 //! returns): the disk writes them while the next cases are computed, and the final
 //! `fsync` waits for what is left, the last case and the file's metadata.
