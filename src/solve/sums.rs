@@ -7,8 +7,8 @@
 //! once per run, and [`weighted_sum`] adds those alone. A zero weight contributes
 //! `±0` to a sum, so leaving it out changes no finite result; a non-finite slope is
 //! still seen by the first later stage, since every stage's slope has a nonzero
-//! weight in the next stage's row, and by the error estimate, whose rows are summed
-//! in full.
+//! weight in the next stage's row (the tests check it of every tableau), and the
+//! last stage's by the error estimate, whose rows are summed in full.
 
 use super::tableau::ExplicitTableau;
 
@@ -160,7 +160,7 @@ pub(super) fn combine(y: &[f64], h: f64, terms: &[(usize, f64)], k: &[f64], out:
 
 #[cfg(test)]
 mod tests {
-    use super::super::tableau::DOP853;
+    use super::super::tableau::{DOP853, DORMAND_PRINCE, RK4, TSITOURAS5};
     use super::*;
 
     /// A generator of values over many magnitudes and both signs.
@@ -207,6 +207,29 @@ mod tests {
                         assert_eq!(got.to_bits(), want.to_bits(), "n {n} stages {stages} m {m}");
                     }
                 }
+            }
+        }
+    }
+
+    /// What leaving zeros out relies on: in every explicit tableau each stage's slope
+    /// has a nonzero weight in the next row (the next stage's, or for the last stage
+    /// of a continuous extension, some dense-output term), so a non-finite slope still
+    /// reaches a stage state or the interpolant.
+    #[test]
+    fn every_slope_has_a_nonzero_weight_in_the_next_row() {
+        for tab in [&RK4, &DORMAND_PRINCE, &TSITOURAS5, &DOP853] {
+            let extra_a: &[&[f64]] = tab.dense.as_ref().map_or(&[], |d| d.a);
+            let rows: Vec<&[f64]> = tab.a.iter().chain(extra_a).copied().collect();
+            for (i, row) in rows.iter().enumerate().skip(1) {
+                assert_ne!(row[i - 1], 0.0, "order {} row {i}", tab.order);
+            }
+            if let Some(d) = tab.dense.as_ref().filter(|d| !d.c.is_empty()) {
+                let last = tab.all_stages() - 1;
+                assert!(
+                    d.d.iter().any(|row| row[last] != 0.0),
+                    "order {}",
+                    tab.order
+                );
             }
         }
     }
