@@ -75,8 +75,8 @@ impl Analyses {
         })
     }
 
-    /// [`run_case`] with these plans against the simulated case's `reference`, or,
-    /// without one, [`run_recording`] (a recordings study's case).
+    /// [`simulate_case`] and [`Analyses::finish`] against the simulated case's
+    /// `reference`, or, without one, [`run_recording`] (a recordings study's case).
     pub(crate) fn run(
         &mut self,
         study: &Study,
@@ -84,101 +84,149 @@ impl Analyses {
         case: &Case,
         reference: Option<&CaseOutput>,
     ) -> CaseResult {
-        let (plan, envelope, orders) =
-            (&mut self.plan, self.envelope.as_mut(), self.orders.as_mut());
         match reference {
-            Some(reference) => run_case(study, row, case, reference, plan, envelope, orders),
-            None => run_recording(study, row, case, plan, envelope, orders),
+            Some(reference) => match simulate_case(study, row, case) {
+                Ok(simulated) => self.finish(study, simulated, reference),
+                Err(failed) => *failed,
+            },
+            None => {
+                let (plan, envelope, orders) =
+                    (&mut self.plan, self.envelope.as_mut(), self.orders.as_mut());
+                run_recording(study, row, case, plan, envelope, orders)
+            }
+        }
+    }
+
+    /// The spectra and metrics of the `simulated` case against `reference` (the ideal
+    /// mechanism at the same speed), the series of the study's sensors (docs/model.md
+    /// §7.8, made before the analysis, which may read them), the envelope analysis
+    /// when the study has one, the order spectra when it asks for them (docs/model.md
+    /// §7.9) and the metrics per whole crank revolution (docs/model.md §6.1); with
+    /// replicates, runs its perturbed replicates one after the other and adds their
+    /// metrics, statistics and predictability horizon (docs/model.md §9.5). Never
+    /// fails: a failed analysis becomes a [`Status::Failed`] result with its message;
+    /// a failed perturbed replicate leaves its metrics NaN and its message in
+    /// [`CaseResult::replicate_messages`]. The case's wall time is its simulation's
+    /// and this analysis's, whichever threads they ran on.
+    pub(crate) fn finish(
+        &mut self,
+        study: &Study,
+        simulated: Simulated<'_>,
+        reference: &CaseOutput,
+    ) -> CaseResult {
+        let start = std::time::Instant::now();
+        let cpu_start = thread_cpu();
+        let Simulated {
+            row,
+            case,
+            out,
+            wall,
+            mut cost,
+        } = simulated;
+        let wall = |start: std::time::Instant| wall + start.elapsed().as_secs_f64();
+        let params = &case.params;
+        let sensor_series = measure_sensors(study, case, &out);
+        let analysis = analyse(
+            params,
+            &out,
+            &sensor_series,
+            Some(reference),
+            study.analysis_window(),
+            &study.spectrum_channels,
+            &mut self.plan,
+            self.envelope.as_mut(),
+            self.orders.as_mut(),
+        );
+        let CaseAnalysis {
+            mut spectra,
+            mut metrics,
+            order_spectra,
+        } = match analysis {
+            Ok(a) => a,
+            Err(e) => return failed(study, row, e.to_string(), cost, wall(start)),
+        };
+        keep_stored_bins(study, &mut spectra);
+        // The per-revolution metrics reread the samples already analysed (docs/model.md §6.1).
+        let per_revolution = (study.revolutions > 0).then(|| {
+            let windows = revolution_windows(&params.drive(), &study.sampling, study.transient);
+            revolution_metrics(&out, reference, &windows, study.revolutions)
+        });
+        cost.analysis = thread_cpu() - cpu_start;
+        let replicates = study.replicates.map(|r| {
+            let plan = &mut self.plan;
+            run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost)
+        });
+        let series = stored_series(study, out.channels, sensor_series);
+        metrics.push(wall(start));
+        let mut replicate_messages = Vec::new();
+        if let Some(mut r) = replicates {
+            replicate_messages = std::mem::take(&mut r.messages);
+            push_replicates(study, r, &mut metrics);
+        }
+        metrics.extend(per_revolution.into_iter().flatten());
+        metrics.extend(order_spectra.into_iter().flatten());
+        debug_assert_eq!(metrics.len(), metric_values(study));
+        CaseResult {
+            row,
+            status: Status::Ok,
+            message: String::new(),
+            series,
+            spectra,
+            metrics,
+            replicate_messages,
+            cost,
         }
     }
 }
 
-/// Simulates `case` at file row `row` and derives spectra and metrics against
-/// `reference` (the ideal mechanism at the same speed), the series of the study's
-/// sensors (docs/model.md §7.8, made before the analysis, which may read them), the
-/// envelope analysis when the study has one (`envelope`, planned for it), the order
-/// spectra when it asks for them (`orders`, docs/model.md §7.9) and the metrics per
-/// whole crank revolution (docs/model.md §6.1); with replicates, runs its perturbed
-/// replicates one after the other and adds their metrics, statistics and
-/// predictability horizon (docs/model.md §9.5). Never fails: a failure of the case
-/// (replicate 0) becomes a [`Status::Failed`] result with its message; a failed
-/// perturbed replicate leaves its metrics NaN and its message in
-/// [`CaseResult::replicate_messages`].
-fn run_case(
+/// A simulated case whose analysis is still to come ([`Analyses::finish`]), owned
+/// but for its case, so it can cross threads.
+pub(crate) struct Simulated<'a> {
+    /// Row of the case in the file.
+    row: usize,
+    case: &'a Case,
+    out: CaseOutput,
+    /// Wall-clock time the simulation took (s).
+    wall: f64,
+    cost: CaseCost,
+}
+
+impl Simulated<'_> {
+    /// What simulating the case cost.
+    pub(crate) fn cost(&self) -> CaseCost {
+        self.cost
+    }
+}
+
+/// Simulates `case` at file row `row` and checks that its journal stayed where the
+/// bearing allows ([`check_eccentricity`]). A case that fails either way becomes its
+/// [`Status::Failed`] result, with its message.
+pub(crate) fn simulate_case<'a>(
     study: &Study,
     row: usize,
-    case: &Case,
-    reference: &CaseOutput,
-    plan: &mut SpectrumPlan,
-    envelope: Option<&mut EnvelopeAnalysis>,
-    orders: Option<&mut OrderAnalysis>,
-) -> CaseResult {
+    case: &'a Case,
+) -> Result<Simulated<'a>, Box<CaseResult>> {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
-    let params = &case.params;
-    let simulated = simulate(params, &study.solver, &study.sampling);
-    let cpu_simulated = thread_cpu();
-    let mut cost = CaseCost {
-        simulate: cpu_simulated - cpu_start,
+    let simulated = simulate(&case.params, &study.solver, &study.sampling);
+    let cost = CaseCost {
+        simulate: thread_cpu() - cpu_start,
         analysis: 0.0,
     };
-    let failed = |message: String, cost: CaseCost| failed(study, row, message, cost, start);
-    let out = match simulated.map_err(|e| e.to_string()).and_then(|out| {
-        check_eccentricity(params, &out)?;
+    let checked = simulated.map_err(|e| e.to_string()).and_then(|out| {
+        check_eccentricity(&case.params, &out)?;
         Ok(out)
-    }) {
-        Ok(out) => out,
-        Err(message) => return failed(message, cost),
-    };
-    let sensor_series = measure_sensors(study, case, &out);
-    let analysis = analyse(
-        params,
-        &out,
-        &sensor_series,
-        Some(reference),
-        study.analysis_window(),
-        &study.spectrum_channels,
-        plan,
-        envelope,
-        orders,
-    );
-    let CaseAnalysis {
-        mut spectra,
-        mut metrics,
-        order_spectra,
-    } = match analysis {
-        Ok(a) => a,
-        Err(e) => return failed(e.to_string(), cost),
-    };
-    keep_stored_bins(study, &mut spectra);
-    // The per-revolution metrics reread the samples already analysed (docs/model.md §6.1).
-    let per_revolution = (study.revolutions > 0).then(|| {
-        let windows = revolution_windows(&params.drive(), &study.sampling, study.transient);
-        revolution_metrics(&out, reference, &windows, study.revolutions)
     });
-    cost.analysis = thread_cpu() - cpu_simulated;
-    let replicates = study
-        .replicates
-        .map(|r| run_replicates(study, case, &r, &out, &metrics, reference, plan, &mut cost));
-    let series = stored_series(study, out.channels, sensor_series);
-    metrics.push(start.elapsed().as_secs_f64());
-    let mut replicate_messages = Vec::new();
-    if let Some(mut r) = replicates {
-        replicate_messages = std::mem::take(&mut r.messages);
-        push_replicates(study, r, &mut metrics);
-    }
-    metrics.extend(per_revolution.into_iter().flatten());
-    metrics.extend(order_spectra.into_iter().flatten());
-    debug_assert_eq!(metrics.len(), metric_values(study));
-    CaseResult {
-        row,
-        status: Status::Ok,
-        message: String::new(),
-        series,
-        spectra,
-        metrics,
-        replicate_messages,
-        cost,
+    let wall = start.elapsed().as_secs_f64();
+    match checked {
+        Ok(out) => Ok(Simulated {
+            row,
+            case,
+            out,
+            wall,
+            cost,
+        }),
+        Err(message) => Err(Box::new(failed(study, row, message, cost, wall))),
     }
 }
 
@@ -200,17 +248,16 @@ pub(super) fn metric_values(study: &Study) -> usize {
 }
 
 /// The record of case row `row` failed with `message`: no series, its metrics NaN but
-/// the wall time since `start`.
+/// the wall time `wall` (s).
 pub(super) fn failed(
     study: &Study,
     row: usize,
     message: String,
     cost: CaseCost,
-    start: std::time::Instant,
+    wall: f64,
 ) -> CaseResult {
     let mut metrics = vec![f64::NAN; metric_values(study)];
-    metrics[metric_specs(study.envelope.as_ref(), study.recordings.is_none()).len() - 1] =
-        start.elapsed().as_secs_f64();
+    metrics[metric_specs(study.envelope.as_ref(), study.recordings.is_none()).len() - 1] = wall;
     CaseResult {
         row,
         status: Status::Failed,

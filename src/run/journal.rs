@@ -545,6 +545,21 @@ impl JournalReader {
 }
 
 #[cfg(test)]
+impl JournalRecord {
+    /// What two runs of the same case share whatever their timing: the row, status,
+    /// stored bytes and checksums, and the bits of every metric value but the one at
+    /// `wall_time` (the case's wall-clock time).
+    pub(super) fn data_bits(&self, wall_time: usize) -> (usize, Status, &[u8], &[u32], Vec<u64>) {
+        let metrics = self.metrics.iter().enumerate();
+        let bits = metrics
+            .filter(|&(i, _)| i != wall_time)
+            .map(|(_, v)| v.to_bits())
+            .collect();
+        (self.row, self.status, &self.bytes, &self.sums, bits)
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use std::path::PathBuf;

@@ -21,10 +21,10 @@ mod progress;
 mod recording;
 mod references;
 mod stats;
+mod workers;
 
 pub use calibrate::{measure_case, Measured};
 pub use case::check_eccentricity;
-use case::Analyses;
 pub use error::RunError;
 pub use journal::JournalError;
 use journal::{JournalHeader, JournalReader, JournalRecord, JournalWriter};
@@ -34,14 +34,12 @@ pub use stats::RunStats;
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc::{sync_channel, SendError, SyncSender, TrySendError};
 use std::time::Instant;
 
 use crate::output::OutputError;
 use crate::output::{
-    new_journal_path, overwrite, remove_durably, rename_durably, side_paths, ChunkEncoder,
-    DataFile, Layout, OutputLock, Status, StudyReader, StudyWriter,
+    new_journal_path, overwrite, remove_durably, rename_durably, side_paths, DataFile, Layout,
+    OutputLock, Status, StudyReader, StudyWriter,
 };
 use crate::signal::spectrum::Window;
 use crate::study::Shard;
@@ -162,28 +160,22 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         ),
         Start::Resume(reader) => Begin::Resume(reader),
     };
-    let mut stats = RunStats::default();
-    let resuming = match &begin {
-        Begin::Resume(reader) => Some(reader),
-        Begin::Fresh(_) => None,
+    // A resumed run's pending cases are those its replay does not recover, so its
+    // file is made and replayed first. A fresh run's workers start at once, and this
+    // thread makes the file while they run the first cases.
+    let (output, replayed) = match begin {
+        Begin::Resume(reader) => {
+            resume_output(study, opts, (&layout, &header), reader, rows.len())?
+        }
+        Begin::Fresh(journal) => (Output::Journal(journal), Replayed::default()),
     };
-    let (mut writer, data) = create_file(study, opts, &layout, resuming, &mut stats)?;
     let references = ReferenceCache::new(study, opts.jobs);
-    let (mut journal, replayed) = match begin {
-        Begin::Resume(reader) => replay(reader, &opts.output, &header, &mut writer, rows.len())?,
-        Begin::Fresh(journal) => (journal, Replayed::default()),
-    };
     let resumed = replayed.done.len();
     let mut pending: Vec<usize> = (0..rows.len())
         .filter(|r| !replayed.done.contains(r))
         .collect();
     dispatch_order(study, &rows, &mut pending);
-    let mut tally = Tally {
-        ok: replayed.ok,
-        failed: replayed.failed,
-        failed_replicates: replayed.failed_replicates,
-        stats,
-    };
+    let mut tally = Tally::after(&replayed);
     let rerun = replayed.journaled - resumed;
     let mut progress = Progress::new(rows.len() as u64, resumed as u64, opts.quiet);
     let work = Work {
@@ -195,22 +187,21 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<RunSummary, RunError> {
         start,
     };
     tally.stats.startup = start.elapsed().as_secs_f64();
-    run_pending(&work, &pending, |rec| {
-        let cpu = thread_cpu();
-        let before = rec
-            .write_to(&mut writer)
-            .map_err(OutputError::file(writer.path()))?;
-        let cpu_hdf5 = thread_cpu();
-        journal
-            .write(rec, before)
-            .map_err(OutputError::io("append to", &journal_path))?;
-        tally.record(rec, cpu, cpu_hdf5, &layout);
-        progress.case_done(rec.status() != Status::Ok);
-        Ok(())
-    })
-    .map(|worker_stats| worker_stats.add_to(&mut tally.stats))?;
+    let (opened, worker_stats) = run_pending(
+        &work,
+        &pending,
+        || output.open(study, opts, &layout),
+        |file, rec| {
+            let (cpu, cpu_hdf5) = file.store(rec, &journal_path)?;
+            tally.record(rec, cpu, cpu_hdf5, &layout);
+            progress.case_done(rec.status() != Status::Ok);
+            Ok(())
+        },
+    )?;
+    worker_stats.add_to(&mut tally.stats);
+    tally.stats.create = opened.create;
     progress.finish();
-    tally.stats.finish = finish_file(writer, journal, data, &opts.output)?;
+    tally.stats.finish = finish_file(opened, &opts.output)?;
     Ok(tally.summary(rows.len(), (resumed, rerun), start))
 }
 
@@ -228,15 +219,16 @@ fn journal_header(study: &Study, shard: Option<Shard>, layout: &Layout) -> Journ
     }
 }
 
-/// Finishes the partial file `data` of `output` and declares it complete: on the disk
-/// before it is renamed, the file, then its new name; then the journal goes. Returns
-/// the CPU time the file's finish took (s).
-fn finish_file(
-    writer: StudyWriter,
-    journal: JournalWriter,
-    data: DataFile,
-    output: &Path,
-) -> Result<f64, RunError> {
+/// Finishes the partial file of `opened` and declares it the result at `output`: on
+/// the disk before it is renamed, the file, then its new name; then the journal goes.
+/// Returns the CPU time the file's finish took (s).
+fn finish_file(opened: Opened, output: &Path) -> Result<f64, RunError> {
+    let Opened {
+        writer,
+        data,
+        journal,
+        ..
+    } = opened;
     let (journal_path, _) = side_paths(output);
     let partial_path = data.path(output);
     let cpu = thread_cpu();
@@ -252,6 +244,77 @@ fn finish_file(
 enum Begin {
     Fresh(JournalWriter),
     Resume(JournalReader),
+}
+
+/// Where a run stores its cases: the partial file and journal, or a fresh run's
+/// journal alone until the file is made.
+enum Output {
+    Open(Box<Opened>),
+    Journal(JournalWriter),
+}
+
+impl Output {
+    /// The partial file, made now for a fresh run ([`create_file`]).
+    fn open(self, study: &Study, opts: &RunOptions, layout: &Layout) -> Result<Opened, RunError> {
+        match self {
+            Output::Open(opened) => Ok(*opened),
+            Output::Journal(journal) => {
+                let (writer, data, create) = create_file(study, opts, layout, None)?;
+                Ok(Opened {
+                    writer,
+                    data,
+                    journal,
+                    create,
+                })
+            }
+        }
+    }
+}
+
+impl Opened {
+    /// Copies `rec`'s chunks into the file and appends where they went to the journal
+    /// at `journal_path`. Returns this thread's CPU time (s) before and after the copy.
+    fn store(&mut self, rec: &JournalRecord, journal_path: &Path) -> Result<(f64, f64), RunError> {
+        let cpu = thread_cpu();
+        let before = rec
+            .write_to(&mut self.writer)
+            .map_err(OutputError::file(self.writer.path()))?;
+        let cpu_hdf5 = thread_cpu();
+        self.journal
+            .write(rec, before)
+            .map_err(OutputError::io("append to", journal_path))?;
+        Ok((cpu, cpu_hdf5))
+    }
+}
+
+/// The output of a resumed run: its partial file made ([`create_file`]) and the
+/// journal `reader` read replayed into it ([`replay`]), with what the replay took over.
+fn resume_output(
+    study: &Study,
+    opts: &RunOptions,
+    (layout, header): (&Layout, &JournalHeader),
+    reader: JournalReader,
+    n_rows: usize,
+) -> Result<(Output, Replayed), RunError> {
+    let (mut writer, data, create) = create_file(study, opts, layout, Some(&reader))?;
+    let (journal, replayed) = replay(reader, &opts.output, header, &mut writer, n_rows)?;
+    let opened = Opened {
+        writer,
+        data,
+        journal,
+        create,
+    };
+    Ok((Output::Open(Box::new(opened)), replayed))
+}
+
+/// A run's partial file, open for its cases, with its journal.
+struct Opened {
+    writer: StudyWriter,
+    /// Which partial file `writer` writes.
+    data: DataFile,
+    journal: JournalWriter,
+    /// CPU time making the file took (s): its layout and the references.
+    create: f64,
 }
 
 /// Decides how a run starts from the journal and result file on disk:
@@ -424,16 +487,15 @@ fn complete_result(
 /// Creates the partial file and writes the ideal references into it, made `jobs` at a
 /// time. A result file already at the output (`--force`) stays until the finished
 /// run's file is renamed over it, so a run stopped on the way loses nothing: its
-/// journal beside the old result resumes the new run. Returns the writer and which
+/// journal beside the old result resumes the new run. Returns the writer, which
 /// partial file it writes (a resumed run writes the other one than its journal's
-/// cases are in).
+/// cases are in) and the CPU time this took (s).
 fn create_file(
     study: &Study,
     opts: &RunOptions,
     layout: &Layout,
     reader: Option<&JournalReader>,
-    stats: &mut RunStats,
-) -> Result<(StudyWriter, DataFile), RunError> {
+) -> Result<(StudyWriter, DataFile, f64), RunError> {
     let data = reader.map_or(DataFile::Partial, |r| r.data_file().other());
     let partial_path = data.path(&opts.output);
     let cpu = thread_cpu();
@@ -452,21 +514,7 @@ fn create_file(
             .map_err(OutputError::file(&partial_path))?;
         Ok(())
     })?;
-    stats.create = thread_cpu() - cpu;
-    Ok((writer, data))
-}
-
-/// What the workers need to run cases.
-struct Work<'a> {
-    study: &'a Study,
-    /// The study's case index of every file row.
-    rows: &'a [usize],
-    /// The ideal references, by index, made where a case needs one.
-    references: &'a ReferenceCache<'a>,
-    storage: crate::output::Storage,
-    jobs: usize,
-    /// When the run started (for the workers' idle time at the end).
-    start: Instant,
+    Ok((writer, data, thread_cpu() - cpu))
 }
 
 /// Counts what the writer stored.
@@ -478,6 +526,16 @@ struct Tally {
 }
 
 impl Tally {
+    /// The tally of a run that took over `replayed` from an interrupted one.
+    fn after(replayed: &Replayed) -> Self {
+        Self {
+            ok: replayed.ok,
+            failed: replayed.failed,
+            failed_replicates: replayed.failed_replicates,
+            stats: RunStats::default(),
+        }
+    }
+
     /// The summary of a run of `cases` cases that started at `start`, `resumed` of
     /// them from the journal and `rerun` run again.
     fn summary(self, cases: usize, (resumed, rerun): (usize, usize), start: Instant) -> RunSummary {
@@ -511,72 +569,6 @@ impl Tally {
             self.failed += 1
         }
     }
-}
-
-/// Runs the `pending` rows on `work.jobs` workers, the costliest first, and hands
-/// each finished case's record to `store` on this thread (the one writer). Returns
-/// the workers' tally.
-fn run_pending(
-    work: &Work<'_>,
-    pending: &[usize],
-    mut store: impl FnMut(&JournalRecord) -> Result<(), RunError>,
-) -> Result<WorkerTally, RunError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(work.jobs.max(1))
-        .build()?;
-    // At most two records per worker wait for the writer: memory stays bounded.
-    let (tx, rx) = sync_channel::<Box<JournalRecord>>(2 * work.jobs.max(1));
-    let tally = WorkerTally::default();
-    let received = std::thread::scope(|scope| -> Result<usize, RunError> {
-        // The workers own the sender: when they end, normally or not, the channel closes.
-        let tally = &tally;
-        scope.spawn(move || {
-            // Every worker takes the next case of `pending` until none is left or the
-            // writer is gone.
-            let next = AtomicUsize::new(0);
-            pool.broadcast(|_| {
-                let mut analyses =
-                    Analyses::new(work.study).expect("window length checked by the layout");
-                let mut encoder = ChunkEncoder::new(work.storage);
-                while let Some(&row) = pending.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let case = &work.study.cases[work.rows[row]];
-                    // A measured recording has no reference.
-                    let reference = work.study.recordings.is_none().then(|| {
-                        work.references
-                            .get(case.reference)
-                            .expect("every reference ran when the file was created")
-                    });
-                    let result = analyses.run(work.study, row, case, reference.as_deref());
-                    let cpu = thread_cpu();
-                    let record = Box::new(JournalRecord::encode(&result, &mut encoder));
-                    tally.case(
-                        result.cost.simulate,
-                        result.cost.analysis,
-                        thread_cpu() - cpu,
-                    );
-                    if send(&tx, record, tally).is_err() {
-                        break;
-                    }
-                }
-                tally.out_of_cases(work.start.elapsed());
-            });
-        });
-        let mut received = 0;
-        // `rx` is consumed: if this loop stops early (an error), the channel closes and
-        // the workers stop instead of waiting for a writer that is gone.
-        for rec in rx {
-            store(&rec)?;
-            received += 1;
-        }
-        Ok(received)
-    })?;
-    if received != pending.len() {
-        return Err(RunError::WorkerStopped {
-            received,
-            pending: pending.len(),
-        });
-    }
-    Ok(tally)
 }
 
 /// What a resumed run took over from the journal of the interrupted one.
@@ -650,21 +642,7 @@ fn replay(
     Ok((journal, replayed))
 }
 
-/// Sends `record` to the writer; a send that finds the channel full (the writer is
-/// behind, so the worker waits) is counted in `tally` with its waiting time.
-fn send<T>(tx: &SyncSender<T>, record: T, tally: &WorkerTally) -> Result<(), SendError<T>> {
-    match tx.try_send(record) {
-        Ok(()) => Ok(()),
-        Err(TrySendError::Disconnected(record)) => Err(SendError(record)),
-        Err(TrySendError::Full(record)) => {
-            let waiting = Instant::now();
-            let sent = tx.send(record);
-            tally.blocked(waiting.elapsed());
-            sent
-        }
-    }
-}
-
 use order::dispatch_order;
 use progress::Progress;
-use stats::{thread_cpu, WorkerTally};
+use stats::thread_cpu;
+use workers::{run_pending, Work};

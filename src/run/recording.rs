@@ -35,7 +35,7 @@ pub(super) fn run_recording(
     };
     let series = match read {
         Ok(values) => values,
-        Err(message) => return failed(study, row, message, cost, start),
+        Err(message) => return failed(study, row, message, cost, start.elapsed().as_secs_f64()),
     };
     // The recording's times are the study's sample times: the file keeps no others.
     let out = CaseOutput {
@@ -63,7 +63,15 @@ pub(super) fn run_recording(
         order_spectra,
     } = match analysis {
         Ok(a) => a,
-        Err(e) => return failed(study, row, e.to_string(), cost, start),
+        Err(e) => {
+            return failed(
+                study,
+                row,
+                e.to_string(),
+                cost,
+                start.elapsed().as_secs_f64(),
+            )
+        }
     };
     keep_stored_bins(study, &mut spectra);
     cost.analysis = thread_cpu() - cpu_read;

@@ -31,10 +31,17 @@ pub struct RunStats {
     /// Encoding chunks and journal records: float32 conversion, shuffle, deflate,
     /// checksum (workers), s.
     pub encode: f64,
+    /// Spectra and metrics of the cases a worker handed over once simulated, while a
+    /// core was left over for the writer (writer thread), s.
+    pub analysis_writer: f64,
+    /// Encoding the cases a worker handed over unencoded, while a core was left over
+    /// for the writer (writer thread), s.
+    pub encode_writer: f64,
     /// Appending records to the journal (writer thread), s.
     pub journal: f64,
     /// Creating the HDF5 file (layout, coordinates, parameters) and writing the
-    /// reference runs (writer thread), s.
+    /// reference runs (writer thread, while the workers run the first cases of a
+    /// fresh run), s.
     pub create: f64,
     /// Writing the cases into the HDF5 file (writer thread), s.
     pub hdf5: f64,
@@ -50,8 +57,9 @@ pub struct RunStats {
     pub raw_bytes: u64,
     /// Bytes of the chunks written for them (after float32 conversion and deflate).
     pub stored_bytes: u64,
-    /// Wall-clock time from the start of the run to the workers' start (s): file
-    /// creation, the ideal references and any resume replay.
+    /// Wall-clock time from the start of the run to the workers' start (s): deciding
+    /// how to start and, for a resumed run, making its file and replaying the journal
+    /// (a fresh run makes its file while the workers run).
     pub startup: f64,
     /// Wall-clock time the workers sat idle at the end, summed over the workers (s):
     /// from the moment each found no case left to the end of the last case.
@@ -61,7 +69,13 @@ pub struct RunStats {
 impl RunStats {
     /// CPU time of the output side: spectra, metrics, encoding, journal, HDF5 (s).
     pub fn output(&self) -> f64 {
-        self.analysis + self.encode + self.journal + self.create + self.hdf5 + self.finish
+        self.analysis
+            + self.encode
+            + self.encode_writer
+            + self.journal
+            + self.create
+            + self.hdf5
+            + self.finish
     }
 
     /// CPU time of everything measured (s).
@@ -90,6 +104,8 @@ impl std::fmt::Display for RunStats {
             ("simulate (workers)", self.simulate),
             ("spectra+metrics (workers)", self.analysis),
             ("encode (workers)", self.encode),
+            ("spectra+metrics (writer)", self.analysis_writer),
+            ("encode (writer)", self.encode_writer),
             ("journal (writer)", self.journal),
             ("create file (writer)", self.create),
             ("hdf5 (writer)", self.hdf5),
@@ -130,6 +146,8 @@ pub(super) struct WorkerTally {
     simulate_ns: AtomicU64,
     analysis_ns: AtomicU64,
     encode_ns: AtomicU64,
+    writer_analysis_ns: AtomicU64,
+    writer_encode_ns: AtomicU64,
     blocked_sends: AtomicU64,
     send_wait_ns: AtomicU64,
     /// Over the workers, the sum and the latest of the moments each found no case
@@ -152,6 +170,15 @@ impl WorkerTally {
         self.analysis_ns
             .fetch_add(nanos(analysis), Ordering::Relaxed);
         self.encode_ns.fetch_add(nanos(encode), Ordering::Relaxed);
+    }
+
+    /// One case handed over to the writer: its analysis (0 when its worker did it)
+    /// and encoding CPU time on the writer (s).
+    pub(super) fn finished_by_writer(&self, analysis: f64, encode: f64) {
+        self.writer_analysis_ns
+            .fetch_add(nanos(analysis), Ordering::Relaxed);
+        self.writer_encode_ns
+            .fetch_add(nanos(encode), Ordering::Relaxed);
     }
 
     /// One send found the channel full and waited `waited`.
@@ -179,6 +206,8 @@ impl WorkerTally {
         stats.simulate += s(&self.simulate_ns);
         stats.analysis += s(&self.analysis_ns);
         stats.encode += s(&self.encode_ns);
+        stats.analysis_writer += s(&self.writer_analysis_ns);
+        stats.encode_writer += s(&self.writer_encode_ns);
         stats.blocked_sends += self.blocked_sends.load(Ordering::Relaxed);
         stats.send_wait += s(&self.send_wait_ns);
     }
