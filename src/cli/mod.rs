@@ -205,6 +205,10 @@ struct RunArgs {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Worker threads [default: all cores; at most 4 per core].
+    ///
+    /// With fewer workers than the cores this process may use, the writer thread
+    /// also analyses and encodes cases on a spare core, so `-j 1` can keep two cores
+    /// busy.
     #[arg(short, long, value_parser = clap::value_parser!(u64).range(1..))]
     jobs: Option<u64>,
     /// Continue an interrupted run from its journal (OUTPUT.journal).

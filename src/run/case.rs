@@ -166,7 +166,20 @@ impl Analyses {
         metrics.extend(per_revolution.into_iter().flatten());
         metrics.extend(order_spectra.into_iter().flatten());
         debug_assert_eq!(metrics.len(), metric_values(study));
-        CaseResult {
+        CaseResult::ok(row, (series, spectra, metrics), replicate_messages, cost)
+    }
+}
+
+impl CaseResult {
+    /// The record of case row `row` that ran to the end: its `(series, spectra,
+    /// metrics)`, its replicates' messages and its cost.
+    pub(super) fn ok(
+        row: usize,
+        (series, spectra, metrics): (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>),
+        replicate_messages: Vec<String>,
+        cost: CaseCost,
+    ) -> Self {
+        Self {
             row,
             status: Status::Ok,
             message: String::new(),

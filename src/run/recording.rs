@@ -4,7 +4,6 @@
 use super::case::{failed, keep_stored_bins, metric_values, CaseCost, CaseResult};
 use super::stats::thread_cpu;
 use crate::mechanism::Location;
-use crate::output::Status;
 use crate::recordings::read::read_samples;
 use crate::signal::spectrum::SpectrumPlan;
 use crate::signal::{analyse, CaseAnalysis, EnvelopeAnalysis, OrderAnalysis};
@@ -83,16 +82,7 @@ pub(super) fn run_recording(
     metrics.push(start.elapsed().as_secs_f64());
     metrics.extend(order_spectra.into_iter().flatten());
     debug_assert_eq!(metrics.len(), metric_values(study));
-    CaseResult {
-        row,
-        status: Status::Ok,
-        message: String::new(),
-        series,
-        spectra,
-        metrics,
-        replicate_messages: Vec::new(),
-        cost,
-    }
+    CaseResult::ok(row, (series, spectra, metrics), Vec::new(), cost)
 }
 
 /// The first [`Study::sampling`] samples of the recording of `case`; the error says
