@@ -87,9 +87,10 @@ impl Finisher {
     }
 }
 
-/// Whether a worker hands its finished case to the writer unencoded: only while a
-/// core is left over for the writer and the writer has no case in hand (none sent
-/// and not yet stored), so the writer never falls behind the workers for it.
+/// Whether a worker hands its case to the writer to finish (once simulated, or
+/// analysed but unencoded): only while a core is left over for the writer and the
+/// writer has no case in hand (none sent and not yet stored), so the writer never
+/// falls behind the workers for it, and at most one such case waits per worker.
 struct Handover {
     /// Fewer workers than the cores this process may use.
     spare_core: bool,
@@ -106,7 +107,7 @@ impl Handover {
         }
     }
 
-    /// Whether the writer is free to encode the case about to be sent.
+    /// Whether the writer is free to finish the case about to be sent.
     fn writer_free(&self) -> bool {
         self.spare_core && self.in_hand.load(Ordering::Acquire) == 0
     }
