@@ -308,42 +308,170 @@ pub fn simulate_perturbed(
 /// Integrates `model` with `solver` and samples its outputs at `sampling`'s times
 /// (validated by the caller); a model without state is sampled in closed form.
 pub fn simulate_model<M: CaseModel>(
-    mut model: M,
+    model: M,
     solver: &SolverSettings,
     sampling: &Sampling,
 ) -> Result<CaseOutput, SolveError> {
-    let start = Instant::now();
-    let times = sampling.times();
-    // Each series gets its full length up front (`vec![v; n]` would clone `v`
-    // without its capacity, and the series would grow by reallocation).
-    let mut channels: Vec<Vec<f64>> = CHANNELS
-        .iter()
-        .map(|_| Vec::with_capacity(times.len()))
-        .collect();
-    let location = model.location();
-    let mut record = |m: &mut M, t: f64, y: &[f64]| {
+    integrate_model(model, solver, sampling)?.sample()
+}
+
+/// Integrates `case` with `solver` at `sampling`'s times, leaving the sampling of a
+/// model whose outputs are pure to [`Integrated::sample`] (which may run on another
+/// thread).
+pub fn integrate_case(
+    case: &CaseParams,
+    solver: &SolverSettings,
+    sampling: &Sampling,
+) -> Result<Integrated<SliderCrank>, CaseError> {
+    sampling.validate()?;
+    Ok(integrate_model(build_model(case)?, solver, sampling)?)
+}
+
+/// A case integrated: sampled as it went, or, for a model whose outputs depend on
+/// the state alone ([`CaseModel::outputs_are_pure`]), with its states at the sample
+/// times kept for [`Integrated::sample`], which gives the same bits.
+pub enum Integrated<M> {
+    /// Sampled during the integration.
+    Sampled(CaseOutput),
+    /// The states at the sample times, to be sampled.
+    States(States<M>),
+}
+
+/// A pure model's states at its sample times.
+pub struct States<M> {
+    model: M,
+    times: Vec<f64>,
+    /// The state at `times[k]`: `values[k * dim .. (k + 1) * dim]`.
+    values: Vec<f64>,
+    dim: usize,
+    stats: Stats,
+    /// Wall-clock time of the integration (s).
+    wall_time: f64,
+}
+
+impl<M: CaseModel> Integrated<M> {
+    /// The case's outputs at its sample times.
+    pub fn sample(self) -> Result<CaseOutput, SolveError> {
+        let states = match self {
+            Integrated::Sampled(out) => return Ok(out),
+            Integrated::States(states) => states,
+        };
+        let start = Instant::now();
+        let States {
+            mut model,
+            times,
+            values,
+            dim,
+            stats,
+            wall_time,
+        } = states;
+        let location = model.location();
+        let mut channels = empty_channels(times.len());
+        let mut record = recorder(&mut channels, location);
+        for (&t, y) in times.iter().zip(values.chunks_exact(dim)) {
+            record(&mut model, t, y).map_err(|source| SolveError::Model { t, source })?;
+        }
+        drop(record);
+        Ok(CaseOutput {
+            location,
+            times,
+            channels,
+            stats,
+            wall_time: wall_time + start.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// One series per [`CHANNELS`] entry, each with room for `n` samples up front
+/// (`vec![v; n]` would clone `v` without its capacity).
+fn empty_channels(n: usize) -> Vec<Vec<f64>> {
+    CHANNELS.iter().map(|_| Vec::with_capacity(n)).collect()
+}
+
+/// The observer that samples a model's outputs into `channels`.
+fn recorder<M: CaseModel>(
+    channels: &mut [Vec<f64>],
+    location: Location,
+) -> impl FnMut(&mut M, f64, &[f64]) -> Result<(), crate::error::ModelError> + '_ {
+    move |m: &mut M, t: f64, y: &[f64]| {
         let s = m.sample(t, y)?;
         for (c, v) in channels.iter_mut().zip(channel_values(&s, location)) {
             c.push(v);
         }
         Ok(())
-    };
-    let stats = if model.dim() == 0 {
+    }
+}
+
+/// Integrates `model` at `sampling`'s times: sampled as it goes, or, when its outputs
+/// are pure, keeping its states for [`Integrated::sample`]. A run that stops early
+/// reports the first sample that fails before it, as sampling on the way would have.
+pub fn integrate_model<M: CaseModel>(
+    mut model: M,
+    solver: &SolverSettings,
+    sampling: &Sampling,
+) -> Result<Integrated<M>, SolveError> {
+    let start = Instant::now();
+    let times = sampling.times();
+    let location = model.location();
+    if model.dim() == 0 {
+        let mut channels = empty_channels(times.len());
+        let mut record = recorder(&mut channels, location);
         for &t in &times {
             record(&mut model, t, &[]).map_err(|source| SolveError::Model { t, source })?;
         }
-        Stats::default()
-    } else {
-        let y0 = model.initial_state();
-        integrate(&mut model, solver, 0.0, &y0, &times, record)?
+        drop(record);
+        return Ok(Integrated::Sampled(CaseOutput {
+            location,
+            times,
+            channels,
+            stats: Stats::default(),
+            wall_time: start.elapsed().as_secs_f64(),
+        }));
+    }
+    let y0 = model.initial_state();
+    if !model.outputs_are_pure() {
+        let mut channels = empty_channels(times.len());
+        let stats = integrate(
+            &mut model,
+            solver,
+            0.0,
+            &y0,
+            &times,
+            recorder(&mut channels, location),
+        )?;
+        return Ok(Integrated::Sampled(CaseOutput {
+            location,
+            times,
+            channels,
+            stats,
+            wall_time: start.elapsed().as_secs_f64(),
+        }));
+    }
+    let dim = y0.len();
+    let mut values = Vec::with_capacity(times.len() * dim);
+    let keep = |_: &mut M, _: f64, y: &[f64]| {
+        values.extend_from_slice(y);
+        Ok(())
     };
-    Ok(CaseOutput {
-        location,
-        times,
-        channels,
-        stats,
+    let run = integrate(&mut model, solver, 0.0, &y0, &times, keep);
+    let states = States {
+        model,
+        values,
+        dim,
+        stats: run.as_ref().copied().unwrap_or_default(),
         wall_time: start.elapsed().as_secs_f64(),
-    })
+        times,
+    };
+    match run {
+        Ok(_) => Ok(Integrated::States(states)),
+        Err(e) => {
+            // The samples served before the run stopped, as they would have been.
+            let served = states.values.len() / dim;
+            let times = states.times[..served].to_vec();
+            let early = States { times, ..states };
+            Integrated::States(early).sample().and(Err(e))
+        }
+    }
 }
 
 #[cfg(test)]
@@ -366,6 +494,46 @@ mod tests {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
         (worst, range)
+    }
+
+    /// A pure model sampled after its integration, from the states it kept, gives the
+    /// bits of sampling it on the way; a model with memory is sampled on the way.
+    #[test]
+    fn outputs_sampled_after_the_integration_are_the_same_bits() {
+        let case = CaseParams {
+            location: Location::CrankGround,
+            rpm: 600.0,
+            ..CaseParams::default()
+        };
+        let sampling = Sampling {
+            duration: 0.05,
+            sample_rate: 20_000.0,
+        };
+        let solver = SolverSettings::default();
+        let model = SliderCrank::new(&case).unwrap();
+        assert!(model.outputs_are_pure());
+        let run = integrate_model(model, &solver, &sampling).unwrap();
+        assert!(matches!(run, Integrated::States(_)));
+        let after = run.sample().unwrap();
+        let mut model = SliderCrank::new(&case).unwrap();
+        let times = sampling.times();
+        let mut channels = empty_channels(times.len());
+        let y0 = model.initial_state();
+        let observe = recorder(&mut channels, case.location);
+        let stats = integrate(&mut model, &solver, 0.0, &y0, &times, observe).unwrap();
+        assert_eq!(stats, after.stats);
+        for (c, (a, b)) in after.channels.iter().zip(&channels).enumerate() {
+            let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+            assert!(same && a.len() == b.len(), "channel {c}");
+        }
+        let journal = CaseParams {
+            joint: crate::mechanism::JointKind::DryClearance,
+            ..case
+        };
+        let model = SliderCrank::new(&journal).unwrap();
+        assert!(!model.outputs_are_pure());
+        let run = integrate_model(model, &solver, &sampling).unwrap();
+        assert!(matches!(run, Integrated::Sampled(_)));
     }
 
     /// Both formulations run through the one seam: at crank_rod over 30 ms (through

@@ -17,6 +17,13 @@ pub trait CaseModel: OdeSystem {
     fn initial_state(&mut self) -> Vec<f64>;
     /// The outputs at time `t` (s) and state `y`.
     fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError>;
+    /// Whether [`CaseModel::sample`] depends on `(t, y)` alone, not on what the
+    /// integration did before (latched contact rates, a journal's regime, a warm
+    /// start): then the outputs can be sampled after the integration, from its states
+    /// at the sample times, with the same bits. `false` by default.
+    fn outputs_are_pure(&self) -> bool {
+        false
+    }
 }
 
 impl CaseModel for SliderCrank {
@@ -28,6 +35,9 @@ impl CaseModel for SliderCrank {
     }
     fn sample(&mut self, t: f64, y: &[f64]) -> Result<Sample, ModelError> {
         SliderCrank::sample(self, t, y)
+    }
+    fn outputs_are_pure(&self) -> bool {
+        SliderCrank::outputs_are_pure(self)
     }
 }
 

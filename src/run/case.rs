@@ -1,13 +1,14 @@
 //! One case of a study turned into what the file stores: series, spectra, metrics.
 
 use super::stats::thread_cpu;
+use crate::mechanism::SliderCrank;
 use crate::mechanism::{CaseParams, Location};
 use crate::output::Status;
 use crate::signal::replicates::{predictability_horizon, replicated_metrics, Summary};
 use crate::signal::revolutions::{revolution_metric_specs, revolution_metrics, revolution_windows};
 use crate::signal::spectrum::{SpectrumError, SpectrumPlan};
 use crate::signal::{analyse, metric_specs, CaseAnalysis, EnvelopeAnalysis, OrderAnalysis};
-use crate::simulate::{simulate, simulate_perturbed, CaseOutput};
+use crate::simulate::{integrate_case, simulate_perturbed, CaseError, CaseOutput, Integrated};
 use crate::study::study_metric_specs;
 use crate::study::{Case, Replicates, Study};
 
@@ -119,12 +120,21 @@ impl Analyses {
         let Simulated {
             row,
             case,
-            out,
+            run,
             wall,
             mut cost,
         } = simulated;
         let wall = |start: std::time::Instant| wall + start.elapsed().as_secs_f64();
         let params = &case.params;
+        // The samples, then the journal's place: a case that fails either way fails
+        // as its simulation would have.
+        let sampled = run.sample().map_err(|e| CaseError::from(e).to_string());
+        cost.simulate += thread_cpu() - cpu_start;
+        let out = match sampled.and_then(|out| check_eccentricity(params, &out).map(|()| out)) {
+            Ok(out) => out,
+            Err(message) => return failed(study, row, message, cost, wall(start)),
+        };
+        let cpu_start = thread_cpu();
         let sensor_series = measure_sensors(study, case, &out);
         let analysis = analyse(
             params,
@@ -193,27 +203,27 @@ impl CaseResult {
 }
 
 /// A simulated case whose analysis is still to come ([`Analyses::finish`]), owned
-/// but for its case, so it can cross threads.
+/// but for its case, so it can cross threads. A model whose outputs are pure
+/// leaves its sampling to the analysis ([`Integrated`]).
 pub(crate) struct Simulated<'a> {
     /// Row of the case in the file.
     row: usize,
     case: &'a Case,
-    out: CaseOutput,
-    /// Wall-clock time the simulation took (s).
+    run: Integrated<SliderCrank>,
+    /// Wall-clock time the integration took (s).
     wall: f64,
     cost: CaseCost,
 }
 
 impl Simulated<'_> {
-    /// What simulating the case cost.
+    /// What integrating the case cost.
     pub(crate) fn cost(&self) -> CaseCost {
         self.cost
     }
 }
 
-/// Simulates `case` at file row `row` and checks that its journal stayed where the
-/// bearing allows ([`check_eccentricity`]). A case that fails either way becomes its
-/// [`Status::Failed`] result, with its message.
+/// Integrates `case` at file row `row` ([`integrate_case`]). A case that fails
+/// becomes its [`Status::Failed`] result, with its message.
 pub(crate) fn simulate_case<'a>(
     study: &Study,
     row: usize,
@@ -221,25 +231,21 @@ pub(crate) fn simulate_case<'a>(
 ) -> Result<Simulated<'a>, Box<CaseResult>> {
     let start = std::time::Instant::now();
     let cpu_start = thread_cpu();
-    let simulated = simulate(&case.params, &study.solver, &study.sampling);
+    let run = integrate_case(&case.params, &study.solver, &study.sampling);
     let cost = CaseCost {
         simulate: thread_cpu() - cpu_start,
         analysis: 0.0,
     };
-    let checked = simulated.map_err(|e| e.to_string()).and_then(|out| {
-        check_eccentricity(&case.params, &out)?;
-        Ok(out)
-    });
     let wall = start.elapsed().as_secs_f64();
-    match checked {
-        Ok(out) => Ok(Simulated {
+    match run {
+        Ok(run) => Ok(Simulated {
             row,
             case,
-            out,
+            run,
             wall,
             cost,
         }),
-        Err(message) => Err(Box::new(failed(study, row, message, cost, wall))),
+        Err(e) => Err(Box::new(failed(study, row, e.to_string(), cost, wall))),
     }
 }
 

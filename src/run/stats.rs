@@ -31,8 +31,8 @@ pub struct RunStats {
     /// Encoding chunks and journal records: float32 conversion, shuffle, deflate,
     /// checksum (workers), s.
     pub encode: f64,
-    /// Spectra and metrics of the cases a worker handed over once simulated, while a
-    /// core was left over for the writer (writer thread), s.
+    /// Sampling, spectra and metrics of the cases a worker handed over once
+    /// integrated, while a core was left over for the writer (writer thread), s.
     pub analysis_writer: f64,
     /// Encoding the cases a worker handed over unencoded, while a core was left over
     /// for the writer (writer thread), s.
@@ -104,7 +104,7 @@ impl std::fmt::Display for RunStats {
             ("simulate (workers)", self.simulate),
             ("spectra+metrics (workers)", self.analysis),
             ("encode (workers)", self.encode),
-            ("spectra+metrics (writer)", self.analysis_writer),
+            ("samples+spectra (writer)", self.analysis_writer),
             ("encode (writer)", self.encode_writer),
             ("journal (writer)", self.journal),
             ("create file (writer)", self.create),

@@ -4,8 +4,9 @@
 //! Workers analyse their cases and encode the chunks themselves, so neither holds up
 //! the writer. When a core is left over for the writer (fewer workers than cores)
 //! and the writer has nothing in hand, a worker hands its case over as soon as it is
-//! simulated ([`Handover`]): the writer analyses and encodes it while the worker
-//! runs the next case. A case with replicates (which simulate more) keeps its
+//! integrated ([`Handover`]): the writer samples its outputs (when they are pure,
+//! [`crate::simulate::Integrated`]), analyses and encodes it while the worker runs
+//! the next case. A case with replicates (which simulate more) keeps its
 //! analysis, and hands over only its encoding. The bytes are the same either way.
 
 use std::sync::atomic::{AtomicUsize, Ordering};

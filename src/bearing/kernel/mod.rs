@@ -332,6 +332,12 @@ impl BallSet {
         true
     }
 
+    /// Whether an evaluation depends on more than the state it is given: the
+    /// hysteresis law's per-ball rates are latched at contact onsets.
+    pub fn remembers(&self) -> bool {
+        self.law == ContactLaw::Hysteresis
+    }
+
     /// Whether the damping law latches each ball's approach speed at its contact
     /// onset ([`BallSet::latch`]): the restitution-based laws of docs/model.md §2.5.
     pub fn latches(&self) -> bool {

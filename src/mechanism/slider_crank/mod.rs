@@ -234,6 +234,15 @@ impl SliderCrank {
         self.bearing.is_some() || self.journal.is_some()
     }
 
+    /// Whether [`SliderCrank::sample`] depends on its `(t, y)` alone: true unless a
+    /// plain journal holds a regime or the bearing's damping law latches rates at
+    /// contact onsets ([`BallSet::remembers`](crate::bearing::BallSet::remembers)).
+    /// The margin a sample leaves behind is read by no integrator before its next
+    /// evaluation.
+    pub fn outputs_are_pure(&self) -> bool {
+        self.journal.is_none() && !self.bearing.as_ref().is_some_and(|w| w.balls.remembers())
+    }
+
     /// Runs the right-hand side and the samples on `isa` if the CPU has it, else on
     /// the baseline; returns the one in effect. Results are bit-identical either
     /// way; this is for benchmarks and parity tests.
