@@ -98,16 +98,19 @@ impl Analyses {
         }
     }
 
-    /// The spectra and metrics of the `simulated` case against `reference` (the ideal
-    /// mechanism at the same speed), the series of the study's sensors (docs/model.md
-    /// §7.8, made before the analysis, which may read them), the envelope analysis
-    /// when the study has one, the order spectra when it asks for them (docs/model.md
-    /// §7.9) and the metrics per whole crank revolution (docs/model.md §6.1); with
-    /// replicates, runs its perturbed replicates one after the other and adds their
-    /// metrics, statistics and predictability horizon (docs/model.md §9.5). Never
-    /// fails: a failed analysis becomes a [`Status::Failed`] result with its message;
-    /// a failed perturbed replicate leaves its metrics NaN and its message in
-    /// [`CaseResult::replicate_messages`]. The case's wall time is its simulation's
+    /// Samples the `simulated` case if its integration left that to later
+    /// ([`Integrated::sample`]) and checks its journal's place
+    /// ([`check_eccentricity`]); then its spectra and metrics against `reference`
+    /// (the ideal mechanism at the same speed), the series of the study's sensors
+    /// (docs/model.md §7.8, made before the analysis, which may read them), the
+    /// envelope analysis when the study has one, the order spectra when it asks for
+    /// them (docs/model.md §7.9) and the metrics per whole crank revolution
+    /// (docs/model.md §6.1); with replicates, runs its perturbed replicates one after
+    /// the other and adds their metrics, statistics and predictability horizon
+    /// (docs/model.md §9.5). Never fails: a failed sampling, check or analysis
+    /// becomes a [`Status::Failed`] result with its message; a failed perturbed
+    /// replicate leaves its metrics NaN and its message in
+    /// [`CaseResult::replicate_messages`]. The case's wall time is its integration's
     /// and this analysis's, whichever threads they ran on.
     pub(crate) fn finish(
         &mut self,
